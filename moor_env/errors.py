@@ -1,0 +1,61 @@
+"""Typed errors raised by moor_env.
+
+Every error a user can trigger by input names the offending key, its value and the allowed range, so
+that the command line can print it on one line and exit with code 2.
+"""
+
+from __future__ import annotations
+
+
+class MoorEnvError(Exception):
+    """Base class of all errors raised by moor_env."""
+
+
+class ConfigError(MoorEnvError, ValueError):
+    """A scene or env setting is unknown, of the wrong type, out of range or physically inconsistent.
+
+    Parameters
+    ----------
+    key : str
+        Dotted path of the setting, e.g. ``environment.water_depth_m``.
+    value : object
+        The value that was given.
+    allowed : str
+        The allowed range or set, in words, e.g. ``> 0`` or ``10 .. 5000``.
+    reason : str, optional
+        Extra explanation for cross-field checks.
+    """
+
+    def __init__(self, key: str, value: object, allowed: str, reason: str = "") -> None:
+        self.key = key
+        self.value = value
+        self.allowed = allowed
+        self.reason = reason
+        text = f"{key}={value!r}: allowed {allowed}"
+        if reason:
+            text += f" ({reason})"
+        super().__init__(text)
+
+
+class SimulationDiverged(MoorEnvError, RuntimeError):
+    """The time integration blew up (non-finite or unphysical state).
+
+    Parameters
+    ----------
+    time_s : float
+        Simulated time at which the blow-up was detected [s].
+    component : str
+        Which part of the model failed first, e.g. ``line 'mooring' segment 12`` or ``anchor``.
+    reason : str
+        ``non-finite``, ``speed above limit`` or ``strain above limit``.
+    """
+
+    def __init__(self, time_s: float, component: str, reason: str) -> None:
+        self.time_s = float(time_s)
+        self.component = component
+        self.reason = reason
+        super().__init__(f"simulation diverged at t={self.time_s:.6f} s in {component}: {reason}")
+
+
+class StaticsNotConverged(MoorEnvError, RuntimeError):
+    """The static equilibrium solver did not reach its tolerance."""

@@ -1,0 +1,49 @@
+"""numba options for every kernel, in one place.
+
+``jit`` is ``numba.njit`` with ``cache=True``, ``nogil=True`` and a fastmath flag set *without* ``nnan`` and
+``ninf`` (``fastmath=True`` would turn NaN checks into no-ops and blow-ups would go unnoticed).
+
+numba's on-disk cache is keyed on the file of the jitted entry point only; an edit to a jitted callee
+in another module would leave a stale entry point in the cache (numba issues #1833, #9483). Unless the user
+sets ``NUMBA_CACHE_DIR`` themselves, the cache therefore lives in a folder keyed on a hash of all kernel
+sources, so that any edit to any kernel module starts a fresh cache.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+import tempfile
+from pathlib import Path
+
+import numba
+
+FASTMATH_FLAGS = {"nsz", "arcp", "contract", "reassoc"}
+
+
+def _kernel_source_hash() -> str:
+    digest = hashlib.sha256()
+    for path in sorted(Path(__file__).resolve().parent.glob("*.py")):
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    digest.update(numba.__version__.encode())
+    return digest.hexdigest()[:16]
+
+
+def _configure_cache_dir() -> None:
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    target = Path(base) / "moor_env" / "numba" / _kernel_source_hash()
+    try:
+        target.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        target = Path(tempfile.gettempdir()) / "moor_env_numba" / _kernel_source_hash()
+        target.mkdir(parents=True, exist_ok=True)
+    numba.config.CACHE_DIR = str(target)
+
+
+_configure_cache_dir()
+
+jit = functools.partial(numba.njit, cache=True, nogil=True, fastmath=FASTMATH_FLAGS)

@@ -1,0 +1,77 @@
+"""Morison loads shared by line segments and the anchor: drag on the relative velocity and added mass.
+
+Drag per unit length on a slender element with unit tangent q and relative velocity v_r = u_fluid - v
+(seed 003 eq. 5-11; MoorDyn ``Line::getStateDeriv``)::
+
+    f = 1/2 rho Cd_n D |v_rn| v_rn  +  1/2 rho Cd_t (pi D) |v_rt| v_rt
+
+with v_rt = (v_r . q) q and v_rn = v_r - v_rt. Added mass per unit length is
+rho (pi D^2 / 4) [Ca_n (I - q q^T) + Ca_t q q^T].
+"""
+
+from __future__ import annotations
+
+import math
+
+from moor_env.physics._jit import jit
+
+
+@jit
+def slender_drag(vrx, vry, vrz, qx, qy, qz, half_rho_cdn_d_len, half_rho_cdt_pid_len):
+    """Drag force on a slender piece of given length [N].
+
+    Parameters
+    ----------
+    vrx, vry, vrz : float
+        Relative velocity fluid minus structure [m/s].
+    qx, qy, qz : float
+        Unit tangent of the piece.
+    half_rho_cdn_d_len : float
+        1/2 rho Cd_n D length [kg/m].
+    half_rho_cdt_pid_len : float
+        1/2 rho Cd_t pi D length [kg/m].
+    """
+    vt = vrx * qx + vry * qy + vrz * qz
+    vnx = vrx - vt * qx
+    vny = vry - vt * qy
+    vnz = vrz - vt * qz
+    vn = math.sqrt(vnx * vnx + vny * vny + vnz * vnz)
+    fn = half_rho_cdn_d_len * vn
+    ft = half_rho_cdt_pid_len * abs(vt) * vt
+    return fn * vnx + ft * qx, fn * vny + ft * qy, fn * vnz + ft * qz
+
+
+@jit
+def add_slender_added_mass(mm, node, qx, qy, qz, normal_mass, tangential_mass):
+    """Add ``normal_mass (I - q q^T) + tangential_mass q q^T`` to the 3x3 mass of ``node``.
+
+    ``mm[node]`` holds the symmetric matrix as (xx, yy, zz, xy, xz, yz) [kg].
+    """
+    d = tangential_mass - normal_mass
+    mm[node, 0] += normal_mass + d * qx * qx
+    mm[node, 1] += normal_mass + d * qy * qy
+    mm[node, 2] += normal_mass + d * qz * qz
+    mm[node, 3] += d * qx * qy
+    mm[node, 4] += d * qx * qz
+    mm[node, 5] += d * qy * qz
+
+
+@jit
+def solve_sym3(m, a, b, c, d, e, f, rx, ry, rz):
+    """Solve (m I + S) x = r for the symmetric S = [[a, d, e], [d, b, f], [e, f, c]]."""
+    a11 = m + a
+    a22 = m + b
+    a33 = m + c
+    c11 = a22 * a33 - f * f
+    c12 = e * f - d * a33
+    c13 = d * f - e * a22
+    c22 = a11 * a33 - e * e
+    c23 = d * e - a11 * f
+    c33 = a11 * a22 - d * d
+    det = a11 * c11 + d * c12 + e * c13
+    inv = 1.0 / det
+    return (
+        (c11 * rx + c12 * ry + c13 * rz) * inv,
+        (c12 * rx + c22 * ry + c23 * rz) * inv,
+        (c13 * rx + c23 * ry + c33 * rz) * inv,
+    )

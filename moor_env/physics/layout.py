@@ -1,0 +1,158 @@
+"""Column layout of the flat arrays passed to the kernels: the only place slots are defined.
+
+Nodes and segments live in global arrays; a line owns a contiguous block of segment slots and a
+contiguous block of interior-node slots (capacity for payout)::
+
+    bottom end (anchor back tip / release point / seabed anchor)
+        node L0 ──seg s0── node L1 ──seg s1── ... ──seg s(n-1)── node Ln = top (vessel)
+
+Local node 0 is the line's bottom node, local node n its top node; local nodes 1..n-1 are the global
+nodes ``NODE_START + k - 1``. Segment ``SEG_START + k`` joins local node k to k+1. Payout changes only the
+top segment and adds or removes the node below it.
+"""
+
+# node kinds
+NODE_INACTIVE = -1
+NODE_FREE = 0
+NODE_VESSEL = 1  # prescribed by a vessel track; REF = vessel index
+NODE_BODY = 2  # rigidly attached to the anchor at axial coordinate BODY_S
+NODE_WELDED = 3  # moves with node REF (its mass and loads go to REF)
+NODE_FIXED = 4  # held in space
+
+# node_i columns
+NI_KIND = 0
+NI_REF = 1
+NI_LINE = 2
+N_NODE_I = 3
+
+# node_f columns
+NF_POINT_MASS = 0  # lumped mass [kg]
+NF_POINT_VOLUME = 1  # displaced volume [m^3]
+NF_POINT_CDA = 2  # Cd * area, isotropic [m^2]
+NF_POINT_CA = 3  # added-mass coefficient on POINT_VOLUME
+NF_BODY_S = 4  # axial coordinate on the anchor from its COG, + towards the tip [m]
+N_NODE_F = 5
+
+# seg_i columns
+SI_A = 0
+SI_B = 1
+SI_MAT = 2
+SI_LINE = 3
+SI_ACTIVE = 4
+N_SEG_I = 5
+
+# seg_f columns
+SF_L0 = 0  # unstretched length [m]
+N_SEG_F = 1
+
+# mat_f columns
+MF_EA = 0  # [N]
+MF_MASS = 1  # mass per metre in air [kg/m]
+MF_SUBMERGED = 2  # submerged mass per metre [kg/m]
+MF_D = 3  # hydrodynamic diameter [m]
+MF_CDN = 4
+MF_CDT = 5
+MF_CAN = 6
+MF_CAT = 7
+MF_ZETA = 8  # axial damping ratio of one segment's axial mode
+MF_MBL = 9  # [N]
+N_MAT_F = 10
+
+# line_i columns
+LI_SEG_START = 0
+LI_SEG_CAP = 1
+LI_NSEG = 2
+LI_NODE_START = 3
+LI_NODE_CAP = 4
+LI_BOTTOM = 5
+LI_TOP = 6
+LI_PAYOUT = 7  # 1 if the top segment may change length
+LI_CLAMPED = 8  # set by the kernel when haul-in hit the minimum length
+N_LINE_I = 9
+
+# line_f columns
+LF_L_NOM = 0  # nominal length of a new top segment [m]
+LF_L_MIN_TOP = 1  # merge the top segment below this length [m]
+LF_L_MAX_TOP = 2  # split the top segment above this length [m]
+LF_RATE = 3  # payout rate [m/s], + pays out
+LF_MAX_TENSION = 4  # running maximum of segment tension [N]
+N_LINE_F = 5
+
+# env_f slots
+EF_DEPTH = 0
+EF_G = 1
+EF_RHO = 2
+EF_KBOT = 3
+EF_CBOT = 4
+EF_MU = 5
+EF_FRIC_V = 6
+EF_CUR_DX = 7
+EF_CUR_DY = 8
+EF_CUR_SCALE = 9
+EF_TRACK_T0 = 10
+EF_TRACK_DT = 11
+EF_SPEED_LIMIT = 12
+EF_STRAIN_LIMIT = 13
+EF_SLACK_SMOOTHING = 14  # statics only: strain scale of the smoothed tension-only law (0 = exact)
+N_ENV_F = 15
+
+# body_f slots (anchor rigid body)
+BF_ACTIVE = 0
+BF_MASS_AXIAL = 1  # mass for axial acceleration (structure + flooded water + attached points) [kg]
+BF_M11 = 2  # normal-plane generalized mass: translation [kg]
+BF_M12 = 3  # translation-rotation coupling [kg m]
+BF_M22 = 4  # rotation about a transverse axis through the COG [kg m^2]
+BF_WEIGHT = 5  # gravity on structure + flooded water [N]
+BF_BUOYANCY = 6  # rho g V_outer [N]
+BF_S_BUOY = 7  # axial coordinate of the centre of buoyancy [m]
+BF_S_TIP = 8
+BF_S_BACK = 9
+BF_TIP_CDA = 10  # tip pressure drag Cd*A [m^2]
+BF_BACK_CDA = 11
+BF_LENGTH = 12
+N_BODY_F = 13
+
+# body_q columns (quadrature points along the anchor)
+BQ_S = 0
+BQ_DS = 1
+BQ_CDN_D = 2  # cd_normal * outer diameter [m]
+BQ_CDT_PID = 3  # cd_tangential * pi * outer diameter [m]
+N_BODY_Q = 4
+
+# body state (12): position of COG, velocity, axis unit vector (back -> tip), angular velocity
+BS_POS = 0
+BS_VEL = 3
+BS_AXIS = 6
+BS_OMEGA = 9
+N_BODY_STATE = 12
+
+# kernel status codes
+STATUS_RUNNING = 0
+STATUS_TOUCHDOWN = 1
+STATUS_TIME_LIMIT = 2
+STATUS_NONFINITE = 3
+STATUS_SPEED_LIMIT = 4
+STATUS_STRAIN_LIMIT = 5
+STATUS_NAMES = {
+    STATUS_RUNNING: "running",
+    STATUS_TOUCHDOWN: "touchdown",
+    STATUS_TIME_LIMIT: "time limit",
+    STATUS_NONFINITE: "non-finite",
+    STATUS_SPEED_LIMIT: "speed above limit",
+    STATUS_STRAIN_LIMIT: "strain above limit",
+}
+
+# touchdown record slots (filled by the kernel at the interpolated touchdown instant)
+TD_TIME = 0
+TD_TIP = 1  # 3
+TD_VEL = 4  # 3: velocity of the tip
+TD_AXIS = 7  # 3
+N_TD = 10
+
+# history record columns
+H_TIME = 0
+H_TIP = 1  # 3
+H_TIP_VEL = 4  # 3
+H_AXIS = 7  # 3
+H_OMEGA = 10  # 3
+N_HIST = 13

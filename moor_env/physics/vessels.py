@@ -1,0 +1,125 @@
+"""Vessel tops: prescribed tracks from a sea state and a slow spacing change.
+
+Sea state: a JONSWAP spectrum (DNV-RP-C205 eq. 3.5.5) discretised into ``n`` equal-width frequency bins
+between 0.5 and 3 times the peak frequency, with phases drawn from ``numpy.random.default_rng(seed)``.
+
+Motion transfer (documented simplification, not a vessel RAO from diffraction): each vessel's heave and
+surge follow the wave surface elevation and the horizontal orbital displacement (deep water) at the
+vessel, filtered by a second-order low pass with natural period ``T_n`` and damping ratio ``zeta``:
+
+    H(w) = 1 / (1 - (w/w_n)^2 + 2 i zeta w/w_n)
+
+Long waves are followed one to one; short waves are filtered out, as for a large installation vessel.
+Waves propagate along +x; the second vessel sees them with the phase lag k * spacing.
+
+Tracks are sampled once per run (Python/numpy) at a fixed interval and interpolated linearly in the
+kernel, so no trigonometry is evaluated per time step.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from moor_env.physics._jit import jit
+from moor_env.physics.layout import EF_TRACK_DT, EF_TRACK_T0
+
+
+def jonswap_components(hs_m: float, tp_s: float, gamma: float, n_components: int, seed: int):
+    """Wave components of a JONSWAP sea.
+
+    Returns
+    -------
+    amplitude_m, omega_rad_s, phase_rad : ndarray, shape (n_components,)
+        Component amplitudes [m], angular frequencies [rad/s] and random phases [rad].
+    """
+    wp = 2.0 * math.pi / tp_s
+    edges = np.linspace(0.5 * wp, 3.0 * wp, n_components + 1)
+    omega = 0.5 * (edges[1:] + edges[:-1])
+    dw = edges[1] - edges[0]
+    sigma = np.where(omega <= wp, 0.07, 0.09)
+    pm = 5.0 / 16.0 * hs_m**2 * wp**4 * omega**-5 * np.exp(-1.25 * (omega / wp) ** -4)
+    a_gamma = 1.0 - 0.287 * math.log(gamma)
+    spectrum = a_gamma * pm * gamma ** np.exp(-0.5 * ((omega - wp) / (sigma * wp)) ** 2)
+    amplitude = np.sqrt(2.0 * spectrum * dw)
+    phase = np.random.default_rng(seed).uniform(0.0, 2.0 * math.pi, n_components)
+    return amplitude, omega, phase
+
+
+def motion_transfer(omega: np.ndarray, natural_period_s: float, damping_ratio: float) -> np.ndarray:
+    """Complex heave/surge transfer H(w) of the documented second-order low pass."""
+    r = omega * natural_period_s / (2.0 * math.pi)
+    return 1.0 / (1.0 - r**2 + 2j * damping_ratio * r)
+
+
+def sample_tracks(base_xyz: np.ndarray, spacing_velocity_m_s: np.ndarray, t0_s: float, duration_s: float,
+                  sample_dt_s: float, sea: dict | None, gravity: float) -> np.ndarray:
+    """Sample vessel positions and velocities on a uniform time grid.
+
+    Parameters
+    ----------
+    base_xyz : ndarray, shape (n_vessels, 3)
+        Mean positions at ``t0_s`` [m].
+    spacing_velocity_m_s : ndarray, shape (n_vessels,)
+        Constant horizontal (x) speed of each vessel over the window [m/s].
+    t0_s, duration_s, sample_dt_s : float
+        Start time, length and sampling interval of the window [s].
+    sea : dict or None
+        ``amplitude``, ``omega``, ``phase`` arrays and ``natural_period_s``, ``damping_ratio``; None is calm.
+    gravity : float
+        [m/s^2], for the deep-water wave number.
+
+    Returns
+    -------
+    ndarray, shape (n_vessels, n_samples, 6)
+        Position [m] and velocity [m/s] at ``t0_s + k * sample_dt_s``.
+    """
+    n_samples = int(math.ceil(duration_s / sample_dt_s)) + 2
+    times = t0_s + sample_dt_s * np.arange(n_samples)
+    n_vessels = base_xyz.shape[0]
+    tracks = np.zeros((n_vessels, n_samples, 6))
+    for v in range(n_vessels):
+        tracks[v, :, 0] = base_xyz[v, 0] + spacing_velocity_m_s[v] * (times - t0_s)
+        tracks[v, :, 1] = base_xyz[v, 1]
+        tracks[v, :, 2] = base_xyz[v, 2]
+        tracks[v, :, 3] = spacing_velocity_m_s[v]
+    if sea is not None and np.any(sea["amplitude"] > 0):
+        omega = sea["omega"]
+        k = omega**2 / gravity
+        transfer = motion_transfer(omega, sea["natural_period_s"], sea["damping_ratio"])
+        gain = np.abs(transfer)
+        lag = np.angle(transfer)
+        for v in range(n_vessels):
+            arg = omega[None, :] * times[:, None] - k[None, :] * base_xyz[v, 0] + sea["phase"][None, :] + lag[None, :]
+            amp = (sea["amplitude"] * gain)[None, :]
+            # elevation eta = a cos(arg); deep-water horizontal orbital displacement = a sin(arg)
+            tracks[v, :, 2] += np.sum(amp * np.cos(arg), axis=1)
+            tracks[v, :, 5] += np.sum(-amp * omega[None, :] * np.sin(arg), axis=1)
+            tracks[v, :, 0] += np.sum(amp * np.sin(arg), axis=1)
+            tracks[v, :, 3] += np.sum(amp * omega[None, :] * np.cos(arg), axis=1)
+    return tracks
+
+
+@jit
+def track_state(tracks, vessel, t, env_f):
+    """Linearly interpolated (x, y, z, vx, vy, vz) of ``vessel`` at time ``t``."""
+    n = tracks.shape[1]
+    u = (t - env_f[EF_TRACK_T0]) / env_f[EF_TRACK_DT]
+    if u <= 0.0:
+        i = 0
+        w = 0.0
+    elif u >= n - 1:
+        i = n - 2
+        w = 1.0
+    else:
+        i = int(u)
+        w = u - i
+    return (
+        (1.0 - w) * tracks[vessel, i, 0] + w * tracks[vessel, i + 1, 0],
+        (1.0 - w) * tracks[vessel, i, 1] + w * tracks[vessel, i + 1, 1],
+        (1.0 - w) * tracks[vessel, i, 2] + w * tracks[vessel, i + 1, 2],
+        (1.0 - w) * tracks[vessel, i, 3] + w * tracks[vessel, i + 1, 3],
+        (1.0 - w) * tracks[vessel, i, 4] + w * tracks[vessel, i + 1, 4],
+        (1.0 - w) * tracks[vessel, i, 5] + w * tracks[vessel, i + 1, 5],
+    )
