@@ -368,7 +368,9 @@ def _format_range(err: dict[str, Any]) -> str:
     if "expected" in ctx:
         return f"one of {ctx['expected']}"
     if err["type"] == "extra_forbidden":
-        return "no such key (check spelling)"
+        return "a known key (this one does not exist; see moor-env drop --help)"
+    if err["type"].startswith(("float", "int", "bool")):
+        return "a " + {"f": "number", "i": "whole number", "b": "boolean"}[err["type"][0]]
     if err["type"] == "missing":
         return "a value (required)"
     return err.get("msg", "a valid value")
@@ -380,7 +382,8 @@ def _validation_to_config_error(exc: ValidationError, data: dict[str, Any]) -> C
     value = err.get("input")
     if isinstance(value, dict):
         value = "{...}"
-    reason = "" if err["type"] in ("greater_than", "less_than", "greater_than_equal", "less_than_equal") else err["msg"]
+    plain = ("greater_than", "less_than", "greater_than_equal", "less_than_equal", "extra_forbidden")
+    reason = "" if err["type"] in plain or err["type"].startswith(("float", "int", "bool")) else err["msg"]
     return ConfigError(loc or "scene", value, _format_range(err), reason)
 
 
@@ -400,6 +403,16 @@ def scene_from_dict(data: dict[str, Any]) -> SceneConfig:
     return scene
 
 
+def scene_dict(scene: str | Path) -> dict[str, Any]:
+    """The raw mapping of a bundled scene or YAML file with library entries expanded (for editing)."""
+    path = _resolve_scene_path(scene)
+    with open(path, encoding="utf-8") as fh:
+        data = yaml.safe_load(fh)
+    if not isinstance(data, dict):
+        raise ConfigError("scene", str(path), "a YAML mapping")
+    return _resolve_library(copy.deepcopy(data))
+
+
 def load_scene(scene: str | Path, overrides: dict[str, Any] | None = None) -> SceneConfig:
     """Load a bundled scene by name (``gjoa-500``) or a YAML path, apply overrides and validate.
 
@@ -416,12 +429,7 @@ def load_scene(scene: str | Path, overrides: dict[str, Any] | None = None) -> Sc
     SceneConfig
         The validated, frozen scene.
     """
-    path = _resolve_scene_path(scene)
-    with open(path, encoding="utf-8") as fh:
-        data = yaml.safe_load(fh)
-    if not isinstance(data, dict):
-        raise ConfigError("scene", str(path), "a YAML mapping")
-    data = _resolve_library(copy.deepcopy(data))
+    data = scene_dict(scene)
     for key, value in (overrides or {}).items():
         _apply_override(data, key, value)
     return scene_from_dict(data)

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from moor_env.compile import VESSEL_SECOND, Model, compile_scene
 from moor_env.config import SceneConfig, load_scene
@@ -228,15 +229,19 @@ class Simulator:
         return math.degrees(math.acos(min(1.0, max(-1.0, -ez))))
 
     def top_tensions_n(self) -> dict[str, float]:
-        """Load of each line on its top point (top-segment tension plus the top half-segment's weight and
-        drag) [N] at the current state."""
+        """Load of each line on its vessel (top-segment tension plus the top half-segment's weight and drag),
+        or the top segment's tension for a line ending at a connection node [N], at the current state."""
         self.evaluate_loads()
         out = {}
         for name, info in self.model.lines.items():
             k = self.state.line_i[info.index, L.LI_SEG_START] + self.state.line_i[info.index, L.LI_NSEG] - 1
             top = self.state.seg_i[k, L.SI_B]
-            active = self.state.seg_i[k, L.SI_ACTIVE]
-            out[name] = float(np.linalg.norm(self.work.node_force[top])) if active else 0.0
+            if not self.state.seg_i[k, L.SI_ACTIVE]:
+                out[name] = 0.0
+            elif self.state.node_i[top, L.NI_KIND] == L.NODE_VESSEL:
+                out[name] = float(np.linalg.norm(self.work.node_force[top]))
+            else:  # a line ending at a free connection: its top segment's tension
+                out[name] = float(self.work.seg_tension[k])
         return out
 
     def line_length_on_seabed_m(self, material_names: set[str] | None = None, tolerance_m: float = 0.5) -> float:
@@ -429,7 +434,7 @@ class DropResult:
 
 
 def simulate_drop(scene: str | Path | SceneConfig, overrides: dict[str, Any] | None = None,
-                  keep_snapshots: bool = False, history: bool = True) -> DropResult:
+                  keep_snapshots: bool = False, history: bool = True, progress: bool = False) -> DropResult:
     """Statics, optional pre-release dynamics, release, fall to touchdown.
 
     Parameters
@@ -442,6 +447,8 @@ def simulate_drop(scene: str | Path | SceneConfig, overrides: dict[str, Any] | N
         Store node positions and the anchor axis every ``simulation.snapshot_interval_s`` (for plots).
     history : bool
         Record the tip state every ``simulation.record_interval_s``.
+    progress : bool
+        Show a progress bar over simulated time.
 
     Raises
     ------
@@ -451,11 +458,11 @@ def simulate_drop(scene: str | Path | SceneConfig, overrides: dict[str, Any] | N
     cfg = scene if isinstance(scene, SceneConfig) else load_scene(scene, overrides)
     static = solve_statics(cfg)
     sim = static.simulator
-    return run_drop(sim, static.wall_static_s, keep_snapshots=keep_snapshots, history=history)
+    return run_drop(sim, static.wall_static_s, keep_snapshots=keep_snapshots, history=history, progress=progress)
 
 
 def run_drop(sim: Simulator, wall_static_s: float = 0.0, keep_snapshots: bool = False,
-             history: bool = True) -> DropResult:
+             history: bool = True, progress: bool = False) -> DropResult:
     """Pre-release phase (if ``release_time_s`` > 0), release and fall of a simulator at equilibrium."""
     sc = sim.model.scene
     inst = sc.installation
@@ -481,15 +488,20 @@ def run_drop(sim: Simulator, wall_static_s: float = 0.0, keep_snapshots: bool = 
     snapshots = []
     t_stop = sim.state.t + max_fall
     status = L.STATUS_TIME_LIMIT
-    interval = sc.simulation.snapshot_interval_s if keep_snapshots else max_fall
+    interval = sc.simulation.snapshot_interval_s if keep_snapshots else (0.25 if progress else max_fall)
+    bar = tqdm(total=round(max_fall, 2), unit="s sim", disable=not progress, leave=False,
+               bar_format="{l_bar}{bar}| {n:.2f}/{total:.0f} s simulated [{elapsed}]")
+    t_fall0 = sim.state.t
     while sim.state.t < t_stop - 1e-9:
         if keep_snapshots:
             snapshots.append(_snapshot(sim))
         status, n = sim.advance_to(min(sim.state.t + interval, t_stop), detect_touchdown=sim.model.body_active,
                                    history_every=hist_every)
         n_steps += n
+        bar.update(round(sim.state.t - t_fall0, 2) - bar.n)
         if status == L.STATUS_TOUCHDOWN:
             break
+    bar.close()
     if keep_snapshots:
         snapshots.append(_snapshot(sim))
     wall = time.perf_counter() - t0

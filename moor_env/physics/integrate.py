@@ -331,7 +331,10 @@ def advance(t, t_end, dt, integrator, body_active, detect_touchdown, node_pos, n
             node_f, seg_i, seg_f, mat_f, line_i, line_f, body_f, body_q, env_f, current_profile, tracks,
             node_force, node_mm, node_mass, node_contact, node_acc, seg_tension, body_load, body_acc, pos0, vel0,
             body0, touchdown, hist, hist_count, hist_every):
-    """Step from ``t`` until ``t_end``, touchdown of the anchor tip on the seabed, or a blow-up.
+    """Step from ``t`` until the step nearest ``t_end``, touchdown of the anchor tip, or a blow-up.
+
+    Only whole steps of ``dt`` are taken, so the time reached is within dt/2 of ``t_end`` and a run split into
+    several calls is bit-identical to one call.
 
     Touchdown is interpolated linearly inside the step in which the tip crosses z = -depth: its time, tip
     position, tip velocity and axis are written to ``touchdown``. Every ``hist_every`` steps the tip state is
@@ -349,9 +352,11 @@ def advance(t, t_end, dt, integrator, body_active, detect_touchdown, node_pos, n
     depth = env_f[EF_DEPTH]
     s_tip = body_f[BF_S_TIP]
     n_steps = 0
+    p0x = p0y = p0z = v0x = v0y = v0z = e0x = e0y = e0z = 0.0
     set_constrained_nodes(t, node_pos, node_vel, body_state, node_i, node_f, tracks, env_f)
-    while t < t_end - 1e-9 * dt:
-        h = min(dt, t_end - t)
+    # whole steps only, so that splitting a run into calls never changes the step sequence (determinism)
+    h = dt
+    while t < t_end - 0.5 * dt:
         if detect_touchdown:
             p0x, p0y, p0z, v0x, v0y, v0z = body_point(body_state, s_tip)
             e0x = body_state[BS_AXIS]

@@ -1,0 +1,542 @@
+"""The same dart-anchor drop in MoorDyn-C v2 (PyPI ``moordyn`` 2.7), for cross-code validation.
+
+:func:`run_moordyn_drop` builds a MoorDyn v2 input file from a compiled scene, starts MoorDyn from *our*
+static equilibrium (MoorDyn's own stationary and dynamic-relaxation solvers do not converge on these
+scenes), releases at t = 0 and steps until the anchor tip reaches the seabed.
+
+How the scene maps onto MoorDyn
+-------------------------------
+- **Anchor**: a ``Free`` Body at the anchor's COG carrying body-fixed Rods, one per run of consecutive anchor
+  sections with the same outer diameter, normal Cd and Ca (for the Gjoa DPA: 8.0 m forward at Cd 0.8 and the
+  5.0 m finned aft part at Cd 8, both D = 1.2 m, Ca 1). The Body carries our mass (structure + flooded water)
+  at the COG and our pitch inertia about the COG, given as an *isotropic* inertia so that the tensor is the
+  same in any frame (our model tracks no roll; nothing in either model applies a moment about the axis). The
+  Rods are massless (``Mass/m`` 0): they only supply buoyancy (outer volume, exact centre of buoyancy),
+  normal Morison drag and added mass. Body volume, drag and added mass are 0.
+- **Axial drag**: MoorDyn Rods have no side skin friction (``Cdt`` is hard-coded to 0) and apply ``CdEnd`` on
+  *both* end faces of every Rod, on the axial relative velocity. Our tip and back pressure drag and the skin
+  friction of every section all act along the axis on the same axial relative velocity (a rigid body's
+  points share their axial velocity), so they add up to one axial force 1/2 rho C A |v_a| v_a with
+  C A = tip CdA + back CdA + sum(Cd_t pi D ds) (1.10 x 1.131 m^2 for the DPA). It is given to MoorDyn as
+  ``CdEnd = C / 2`` on the tip Rod (two faces) and 0 on the others. An axial force through the axis has no
+  moment, so where it acts does not matter. ``CaEnd`` = 0 (we have no axial added mass).
+- **Lines**: each run of one material in one of our lines is a MoorDyn Line, with the *same* segments (or
+  ``segment_length_m``), joined by ``Free`` Points (release point, chain/fibre junction); the anchor end is
+  a Point fixed on the Body at the back tip; the second vessel is a ``Fixed`` Point. MoorDyn uses one
+  diameter ``d`` for buoyancy, drag and added mass, we use a hydrodynamic diameter D plus an explicit
+  submerged mass. We choose ``d`` from the displaced volume per metre, ``pi/4 d^2 = (m - m_sub)/rho``, and
+  scale ``Cd`` and ``CdAx`` by ``D/d`` and ``Ca``, ``CaAx`` by ``(D/d)^2``: weight, buoyancy, drag and added
+  mass per metre are then identical. Internal damping: we use ``BA = zeta l0 sqrt(EA m)``, which is exactly
+  MoorDyn's rule for a negative ``BA`` input (``-zeta``), so ``-zeta`` is passed.
+- **Release**: at t = 0 the chain top is a ``Free`` Point; the wire is not modelled (our default scenes drop
+  it at release: ``keep_wire_after_release: false``, release at t = 0).
+- **Initial state**: MoorDyn is created, initialised without its IC solve (``Init_NoIC``), its state is
+  saved (``SaveState``), every free Point and internal line node is overwritten with our static node
+  positions (zero velocities) and the state is loaded back (``LoadState``). With ``segment_length_m`` the
+  MoorDyn nodes are interpolated along our static polyline (by unstretched arc length) and start slightly
+  out of equilibrium.
+- **Touchdown**: the tip (node 0 of the tip Rod) crossing z = -water_depth, interpolated linearly inside the
+  step, as in our kernel.
+
+Modelling differences that cannot be removed (MoorDyn 2.7.2 behaviour)
+----------------------------------------------------------------------
+1. **Internal damping of slack segments.** MoorDyn applies ``BA * strain_rate`` whether or not the segment
+   is taut, so a shortening slack segment carries a *compressive* damping force; ours is tension-only
+   (``max(0, EA e + BA e_dot)`` for e > 0, else 0). A table ``BA`` would not help: MoorDyn's nonlinear
+   damping depends on strain rate only, and divides by it (NaN at rest). This is the one difference that can
+   matter in the fall: a chain falling on top of the anchor is slack and shortening.
+2. **Line Morison loads**: MoorDyn evaluates drag and added mass per node with the node tangent (from the two
+   neighbouring nodes); we evaluate each half segment with the segment tangent. Same limit as the segments
+   shrink; identical for a straight line.
+3. **Anchor-end node of the chain**: MoorDyn adds the end node's added mass (half a segment of chain, ~16 kg
+   per metre of segment) to the Body; ours adds its mass but not its added mass (<1e-3 of the anchor's).
+4. **Normal drag integration along the anchor**: ours is midpoint quadrature (``anchor.quadrature_points``),
+   MoorDyn lumps drag on Rod nodes (trapezoid, ``rod_segment_m``). Both converge to the same integral.
+5. **Seabed** (only for line nodes that reach it before the tip does; the result reports the lowest line
+   node at touchdown): MoorDyn's contact area is ``d l`` with the buoyancy diameter ``d``, ours uses D;
+   MoorDyn's friction is ``min(mu FricDamp v, mu F_z)`` (saturated damping), ours
+   ``mu F_z min(v / v_f, 1)``. ``FricDamp`` is set so that both ramps agree for a resting chain node.
+6. **Time integration**: ours is symplectic Euler (or RK2) at our stability limit, MoorDyn RK4 (default
+   here) at ``dt_s``; both are checked for convergence in the tests and benchmark.
+
+Not supported (raises ``ValueError``): current, waves, a pre-release phase (``release_time_s`` > 0),
+payout or spacing rates, ``keep_wire_after_release``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from moor_env.config import SceneConfig, load_scene
+from moor_env.errors import SimulationDiverged
+from moor_env.physics import layout as L
+from moor_env.simulation import StaticResult, solve_statics
+
+# Stability limits (largest omega * dt) on a damped axial segment mode with damping ratio 0.3, found from
+# the schemes' amplification polynomials; with zeta <= 1 the oscillatory mode binds, and MoorDyn's
+# extra damping on slack segments (a real eigenvalue -2 zeta omega) is well inside both limits.
+_OMEGA_DT_LIMIT = {"rk2": 1.64, "rk4": 2.83}
+DEFAULT_DT_FRACTION = 0.7  # fraction of the RK4 limit used by the default dt (checked converged in tests)
+DEFAULT_ROD_SEGMENT_M = 0.25
+
+
+@dataclass
+class _MDLine:
+    """One MoorDyn line: a run of one material between two of our nodes."""
+
+    material: str
+    point_a: int  # MoorDyn point id
+    point_b: int
+    length_m: float
+    n_seg: int
+    positions: np.ndarray  # (n_seg + 1, 3) initial node positions, A -> B
+
+
+def moordyn_line_type(scene: SceneConfig, material: str) -> dict[str, float]:
+    """MoorDyn line-type columns equivalent to one of our materials.
+
+    MoorDyn's single diameter ``d`` is chosen from the displaced volume (so weight minus buoyancy is our
+    submerged weight) and the coefficients are rescaled so that drag and added mass per metre are ours.
+    """
+    mat = scene.materials[material]
+    rho = scene.environment.water_density_kg_m3
+    m = mat.mass_per_length_kg_m
+    m_sub = mat.submerged_mass_per_length_kg_m
+    if m_sub is None:
+        m_sub = m - rho * math.pi / 4.0 * mat.diameter_m**2
+    displaced = (m - m_sub) / rho
+    if displaced <= 0.0:
+        raise ValueError(f"material {material!r}: MoorDyn needs a positive displaced volume per metre")
+    d = math.sqrt(4.0 * displaced / math.pi)
+    r = mat.diameter_m / d
+    return {"d": d, "w": m, "EA": mat.ea_n, "BA": -mat.axial_damping_ratio, "Cd": mat.cd_normal * r,
+            "Ca": mat.ca_normal * r * r, "CdAx": mat.cd_tangential * r, "CaAx": mat.ca_tangential * r * r,
+            "D_ours": mat.diameter_m}
+
+
+def _check_supported(scene: SceneConfig) -> None:
+    if scene.kind != "dart_installation":
+        raise ValueError("run_moordyn_drop needs a dart_installation scene")
+    env = scene.environment
+    inst = scene.installation
+    if env.current.scale != 0.0 and any(abs(v) > 0 for _, v in env.current.profile):
+        raise ValueError("current is not modelled in the MoorDyn cross-check (set current_scale 0)")
+    if env.sea_state.hs_m > 0.0:
+        raise ValueError("waves are not modelled in the MoorDyn cross-check (sea_state.hs_m must be 0)")
+    if inst.release_time_s > 0.0 or inst.spacing_rate_m_s != 0.0 or inst.payout_rate_m_s != 0.0:
+        raise ValueError("the MoorDyn cross-check releases at t = 0 from statics (no pre-release phase)")
+    if inst.components.wire and inst.components.keep_wire_after_release:
+        raise ValueError("keep_wire_after_release is not modelled in the MoorDyn cross-check")
+
+
+@contextlib.contextmanager
+def _quiet(log_path: Path):
+    """Send the C library's stdout/stderr chatter to ``log_path`` (MoorDyn prints on creation)."""
+    import sys
+
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    with open(log_path, "ab") as fh:
+        os.dup2(fh.fileno(), 1)
+        os.dup2(fh.fileno(), 2)
+        try:
+            yield
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            os.close(saved[0])
+            os.close(saved[1])
+
+
+def _line_nodes(sim, name: str) -> tuple[list[int], list[int], list[float]]:
+    """Global node indices (bottom -> top), segment materials and unstretched lengths of one of our lines."""
+    st = sim.state
+    li = st.line_i[sim.model.lines[name].index]
+    segs = range(li[L.LI_SEG_START], li[L.LI_SEG_START] + li[L.LI_NSEG])
+    nodes = [int(st.seg_i[segs[0], L.SI_A])] + [int(st.seg_i[s, L.SI_B]) for s in segs]
+    mats = [int(st.seg_i[s, L.SI_MAT]) for s in segs]
+    l0 = [float(st.seg_f[s, L.SF_L0]) for s in segs]
+    return nodes, mats, l0
+
+
+def _resample(points: np.ndarray, l0: np.ndarray, n: int) -> np.ndarray:
+    """``n + 1`` points at equal unstretched arc length along a polyline with segment lengths ``l0``."""
+    s = np.concatenate([[0.0], np.cumsum(l0)])
+    u = np.linspace(0.0, s[-1], n + 1)
+    return np.stack([np.interp(u, s, points[:, c]) for c in range(3)], axis=1)
+
+
+def omega_max(line_types: dict[str, dict[str, float]], lines: list[_MDLine], free_points: set[int]) -> float:
+    """Upper bound (Gershgorin) of the fastest axial mode of the MoorDyn lines [rad/s]:
+    omega^2 <= 2 sum(EA/l) / m over the segments meeting at a node (exact for a uniform line), over internal
+    line nodes and ``free_points`` (points on the body or fixed have no line-scale mode)."""
+    stiff: dict[tuple[str, int], float] = {}
+    mass: dict[tuple[str, int], float] = {}
+    for k, ln in enumerate(lines):
+        lt = line_types[ln.material]
+        l_seg = ln.length_m / ln.n_seg
+        for key in (("p", ln.point_a), ("p", ln.point_b)):
+            stiff[key] = stiff.get(key, 0.0) + lt["EA"] / l_seg
+            mass[key] = mass.get(key, 0.0) + 0.5 * lt["w"] * l_seg
+        if ln.n_seg > 1:
+            stiff[("l", k)] = 2.0 * lt["EA"] / l_seg
+            mass[("l", k)] = lt["w"] * l_seg
+    omegas = [math.sqrt(2.0 * stiff[key] / mass[key]) for key in stiff if key[0] == "l" or key[1] in free_points]
+    return max(omegas) if omegas else 0.0
+
+
+def build_moordyn_input(scene: SceneConfig, static: StaticResult, dt_s: float | None = None, scheme: str = "rk4",
+                        segment_length_m: float | dict[str, float] | None = None,
+                        rod_segment_m: float = DEFAULT_ROD_SEGMENT_M,
+                        damping_ratio: float | None = None) -> dict[str, Any]:
+    """The MoorDyn v2 input text for a scene at its static equilibrium, and what is needed to seed it.
+
+    Returns
+    -------
+    dict
+        ``text`` (input file), ``lines`` (list of ``_MDLine``), ``free_points`` ({point id: position}),
+        ``tip_rod``/``back_rod`` (MoorDyn rod ids, 1-based), ``dt_s``, ``line_types``, ``axial_cda_m2``.
+    """
+    sim = static.simulator
+    model = sim.model
+    props = model.extras["anchor"]
+    env = scene.environment
+    inst = scene.installation
+    rho = env.water_density_kg_m3
+    body = sim.state.body_state
+    cog = body[L.BS_POS:L.BS_POS + 3].copy()
+    axis = body[L.BS_AXIS:L.BS_AXIS + 3].copy()
+
+    # --- anchor rods: runs of sections with equal outer diameter, normal Cd and Ca ---------------------
+    groups: list[list] = []
+    x0 = 0.0
+    for sec in scene.anchor.sections:
+        key = (sec.outer_diameter_m, sec.cd_normal, sec.ca_normal)
+        if groups and groups[-1][0] == key:
+            groups[-1][2] += sec.length_m
+        else:
+            groups.append([key, x0, sec.length_m])
+        x0 += sec.length_m
+    q = model.body_q
+    axial_cda = props.tip_cda_m2 + props.back_cda_m2 + float(np.sum(q[:, L.BQ_CDT_PID] * q[:, L.BQ_DS]))
+    rod_types, rods = [], []
+    for k, ((diam, cdn, can), x_start, length) in enumerate(groups):
+        area = math.pi / 4.0 * diam**2
+        cd_end = 0.5 * axial_cda / area if k == 0 else 0.0
+        rod_types.append(f"anchor{k + 1} {diam:.10g} 0 {cdn:.10g} {can:.10g} {cd_end:.10g} 0")
+        s_a = props.cog_from_tip_m - x_start  # axial coordinate from the COG, + towards the tip
+        s_b = s_a - length
+        ra, rb = s_a * axis, s_b * axis
+        nseg = max(2, math.ceil(length / rod_segment_m - 1e-9))
+        rods.append(f"{k + 1} anchor{k + 1} Body1 {ra[0]:.10g} {ra[1]:.10g} {ra[2]:.10g} "
+                    f"{rb[0]:.10g} {rb[1]:.10g} {rb[2]:.10g} {nseg} -")
+
+    # --- lines and points -----------------------------------------------------------------------------
+    points: list[str] = []
+    point_of_node: dict[int, int] = {}
+    free_points: dict[int, np.ndarray] = {}
+    pos = sim.state.node_pos
+    kinds = sim.state.node_i[:, L.NI_KIND]
+
+    def point_for(node: int) -> int:
+        if node in point_of_node:
+            return point_of_node[node]
+        pid = len(points) + 1
+        kind = kinds[node]
+        p = pos[node]
+        if kind == L.NODE_BODY:
+            rel = model.node_f[node, L.NF_BODY_S] * axis
+            points.append(f"{pid} Body1 {rel[0]:.10g} {rel[1]:.10g} {rel[2]:.10g} 0 0 0 0")
+        elif kind == L.NODE_VESSEL:
+            points.append(f"{pid} Fixed {p[0]:.10g} {p[1]:.10g} {p[2]:.10g} 0 0 0 0")
+        else:  # release point (held before release, free after) and material junctions
+            points.append(f"{pid} Free {p[0]:.10g} {p[1]:.10g} {p[2]:.10g} 0 0 0 0")
+            free_points[pid] = p.copy()
+        point_of_node[node] = pid
+        return pid
+
+    if isinstance(segment_length_m, (int, float)):
+        seg_override = {inst.chain_material: float(segment_length_m)}
+    else:
+        seg_override = dict(segment_length_m or {})
+    md_lines: list[_MDLine] = []
+    for name in model.lines:
+        if name == "wire":
+            continue  # dropped at release in the supported scenes
+        nodes, mats, l0 = _line_nodes(sim, name)
+        start = 0
+        while start < len(mats):
+            end = start
+            while end + 1 < len(mats) and mats[end + 1] == mats[start]:
+                end += 1
+            material = model.material_names[mats[start]]
+            run_nodes = nodes[start:end + 2]
+            run_l0 = np.array(l0[start:end + 1])
+            length = float(run_l0.sum())
+            pa, pb = point_for(run_nodes[0]), point_for(run_nodes[-1])
+            poly = pos[run_nodes].copy()
+            if material in seg_override:
+                n = max(1, math.ceil(length / seg_override[material] - 1e-9))
+                poly = _resample(poly, run_l0, n)
+            else:
+                n = len(run_l0)
+                if np.ptp(run_l0) > 1e-9 * length:
+                    poly = _resample(poly, run_l0, n)
+            md_lines.append(_MDLine(material, pa, pb, length, n, poly))
+            start = end + 1
+
+    line_types = {ln.material: moordyn_line_type(scene, ln.material) for ln in md_lines}
+    if damping_ratio is not None:
+        for lt in line_types.values():
+            lt["BA"] = -damping_ratio
+    w_max = omega_max(line_types, md_lines, set(free_points))
+    if dt_s is None:
+        dt_s = DEFAULT_DT_FRACTION * _OMEGA_DT_LIMIT.get(scheme.lower(), 1.0) / w_max if w_max > 0 else 1e-3
+        dt_s = min(dt_s, 1e-3)
+
+    # seabed friction: MoorDyn's saturated damping mu*FricDamp*v reaches mu*F_z at our ramp speed v_f for a
+    # resting chain node (F_z = its submerged weight)
+    sb = env.seabed
+    chain = scene.materials.get(inst.chain_material)
+    fric_damp = 200.0
+    if chain is not None and md_lines:
+        seg = min(ln.length_m / ln.n_seg for ln in md_lines if ln.material == inst.chain_material) \
+            if any(ln.material == inst.chain_material for ln in md_lines) else 1.0
+        m_sub = chain.submerged_mass_per_length_kg_m
+        if m_sub is None:
+            m_sub = chain.mass_per_length_kg_m - rho * math.pi / 4 * chain.diameter_m**2
+        fric_damp = m_sub * env.gravity_m_s2 * seg / sb.friction_velocity_m_s
+
+    out = ["--------------------- MoorDyn Input File ------------------------------------",
+           f"moor_env cross-check of scene '{scene.name}' (generated by moor_env.crosscheck.moordyn)"]
+    if md_lines:
+        out += ["---------------------- LINE TYPES ------------------------------------------",
+                "TypeName Diam Mass/m EA BA/-zeta EI Cd Ca CdAx CaAx",
+                "(name) (m) (kg/m) (N) (N-s/-) (N-m^2) (-) (-) (-) (-)"]
+        for mname, lt in line_types.items():
+            out.append(f"{mname} {lt['d']:.10g} {lt['w']:.10g} {lt['EA']:.10g} {lt['BA']:.10g} 0 "
+                       f"{lt['Cd']:.10g} {lt['Ca']:.10g} {lt['CdAx']:.10g} {lt['CaAx']:.10g}")
+    out += ["---------------------- ROD TYPES ------------------------------------",
+            "TypeName Diam Mass/m Cd Ca CdEnd CaEnd",
+            "(name) (m) (kg/m) (-) (-) (-) (-)", *rod_types,
+            "---------------------- BODIES ---------------------------------------",
+            "ID Attachment X0 Y0 Z0 r0 p0 y0 Mass CG* I* Volume CdA* Ca*",
+            "(#) (-) (m) (m) (m) (deg) (deg) (deg) (kg) (m) (kg-m^2) (m^3) (m^2) (-)",
+            f"1 Free {cog[0]:.10g} {cog[1]:.10g} {cog[2]:.10g} 0 0 0 {props.mass_kg:.10g} 0 "
+            f"{props.inertia_kg_m2:.10g} 0 0 0",
+            "---------------------- RODS ----------------------------------------",
+            "ID RodType Attachment Xa Ya Za Xb Yb Zb NumSegs RodOutputs",
+            "(#) (name) (#/key) (m) (m) (m) (m) (m) (m) (-) (-)", *rods]
+    if points:
+        out += ["---------------------- POINTS ---------------------------------------",
+                "ID Attachment X Y Z Mass Volume CdA Ca",
+                "(#) (-) (m) (m) (m) (kg) (m^3) (m^2) (-)", *points]
+    if md_lines:
+        out += ["---------------------- LINES ----------------------------------------",
+                "ID LineType AttachA AttachB UnstrLen NumSegs LineOutputs",
+                "(#) (name) (#) (#) (m) (-) (-)"]
+        for k, ln in enumerate(md_lines):
+            out.append(f"{k + 1} {ln.material} {ln.point_a} {ln.point_b} {ln.length_m:.12g} {ln.n_seg} -")
+    out += ["---------------------- OPTIONS -----------------------------------------",
+            f"{dt_s:.10g} dtM", f"{scheme} tScheme", f"{env.gravity_m_s2:.10g} g", f"{rho:.10g} rho",
+            f"{env.water_depth_m:.10g} WtrDpth", f"{sb.stiffness_pa_m:.10g} kBot", f"{sb.damping_pa_s_m:.10g} cBot",
+            f"{sb.friction_coefficient:.10g} FrictionCoefficient", f"{fric_damp:.10g} FricDamp",
+            "1 StatDynFricScale", "0 TmaxIC", "1 disableOutput", "1 disableOutTime", "0 writeLog",
+            "------------------------- need this line -------------------------------------", ""]
+    return {"text": "\n".join(out), "lines": md_lines, "free_points": free_points, "tip_rod": 1,
+            "back_rod": len(groups), "back_rod_nseg": int(rods[-1].split()[-2]), "dt_s": dt_s,
+            "line_types": line_types, "axial_cda_m2": axial_cda, "omega_max_rad_s": w_max,
+            "fric_damp": fric_damp}
+
+
+def _seed_state(md, state_path: Path, lines: list[_MDLine], free_points: dict[int, np.ndarray],
+                n_bodies: int, n_rods: int, n_points: int) -> None:
+    """Overwrite MoorDyn's saved state with our static positions (zero velocities) and load it back."""
+    import moordyn
+
+    moordyn.SaveState(md, str(state_path))
+    raw = state_path.read_bytes()
+    head = raw[:9]  # b"MoorDyn" + major + minor version bytes
+    words = np.frombuffer(raw[9:], dtype="<u8").copy()
+    values = words.view("<f8")
+    n_inst = int(words[1])
+    expected = n_bodies + n_rods + n_points + len(lines)
+    if n_inst != expected:
+        raise RuntimeError(f"unexpected MoorDyn state layout: {n_inst} instances, expected {expected}")
+    i = 2
+    blocks = []
+    for _ in range(n_inst):
+        rows, cols = int(words[i]), int(words[i + 1])
+        i += 2
+        blocks.append((i, rows, cols))
+        i += rows * cols
+    if i != words.size or int(words[0]) != words.size - 1:
+        raise RuntimeError("unexpected MoorDyn state file size")
+    for pid, p in free_points.items():
+        start, rows, cols = blocks[n_bodies + n_rods + pid - 1]
+        block = values[start:start + rows * cols].reshape(rows, cols)
+        block[0, :3] = p
+        block[0, 3:6] = 0.0
+    for k, ln in enumerate(lines):
+        start, rows, cols = blocks[n_bodies + n_rods + n_points + k]
+        if rows != ln.n_seg - 1 or cols < 6:
+            raise RuntimeError(f"unexpected MoorDyn state block for line {k + 1}: {rows} x {cols}")
+        block = values[start:start + rows * cols].reshape(rows, cols)
+        block[:, :3] = ln.positions[1:-1]
+        block[:, 3:] = 0.0
+    state_path.write_bytes(head + words.tobytes())
+    moordyn.LoadState(md, str(state_path))
+
+
+def run_moordyn_drop(scene: str | Path | SceneConfig, dt_s: float | None = None, scheme: str = "rk4",
+                     segment_length_m: float | dict[str, float] | None = None,
+                     rod_segment_m: float = DEFAULT_ROD_SEGMENT_M, static: StaticResult | None = None,
+                     overrides: dict[str, Any] | None = None, max_fall_time_s: float | None = None,
+                     damping_ratio: float | None = None) -> dict[str, Any]:
+    """Release the anchor of a scene in MoorDyn from our static equilibrium and fall to touchdown.
+
+    Parameters
+    ----------
+    scene : str, Path or SceneConfig
+        Bundled scene name, YAML path or loaded scene (``overrides`` apply to names and paths).
+    dt_s : float, optional
+        MoorDyn time step ``dtM`` [s]. Default: 0.7 of the scheme's stability limit on the fastest axial
+        segment mode (omega dt <= 2.83 for RK4 at zeta = 0.3), at most 1 ms.
+    scheme : str
+        MoorDyn ``tScheme`` (``rk4`` default; ``rk2`` is MoorDyn's own default).
+    segment_length_m : float or dict, optional
+        Line segment length: a float applies to the chain material, a dict maps material names to lengths.
+        Default: exactly our segments.
+    rod_segment_m : float
+        Segment length of the anchor Rods (drag/added-mass lumping) [m].
+    static : StaticResult, optional
+        Our equilibrium of the same scene, to reuse.
+    max_fall_time_s : float, optional
+        Stop without touchdown after this time [s] (default: ``simulation.max_fall_time_s``).
+    damping_ratio : float, optional
+        Diagnostics only: MoorDyn internal damping ratio of every line instead of the scene's (0 switches
+        it off; RK4 stays stable without damping for omega dt < 2.83).
+
+    Returns
+    -------
+    dict
+        ``status``, ``touchdown_speed_m_s``, ``touchdown_vertical_speed_m_s``, ``tilt_deg`` (from vertical),
+        ``touchdown_time_s``, ``drift_m``, ``wall_s`` (stepping only), ``wall_setup_s``, ``dt_s``,
+        ``scheme``, ``n_steps``, ``n_line_segments``, ``min_line_z_m`` (lowest line node at touchdown),
+        ``line_types`` (the equivalent MoorDyn line types) and ``input_text``.
+
+    Raises
+    ------
+    ValueError
+        For scene features the cross-check does not model (current, waves, pre-release phase...).
+    SimulationDiverged
+        If MoorDyn reports a non-finite state.
+    """
+    import moordyn
+
+    t_setup = time.perf_counter()
+    cfg = scene if isinstance(scene, SceneConfig) else load_scene(scene, overrides)
+    _check_supported(cfg)
+    if static is None:
+        static = solve_statics(cfg)
+    built = build_moordyn_input(cfg, static, dt_s=dt_s, scheme=scheme, segment_length_m=segment_length_m,
+                                rod_segment_m=rod_segment_m, damping_ratio=damping_ratio)
+    dt = built["dt_s"]
+    depth = cfg.environment.water_depth_m
+    max_fall = cfg.simulation.max_fall_time_s if max_fall_time_s is None else max_fall_time_s
+    lines: list[_MDLine] = built["lines"]
+    with tempfile.TemporaryDirectory(prefix="moordyn_xcheck_") as tmp:
+        tmpdir = Path(tmp)
+        infile = tmpdir / "scene.txt"
+        infile.write_text(built["text"])
+        log = tmpdir / "moordyn.log"
+        md = None
+        try:
+            with _quiet(log):
+                md = moordyn.Create(str(infile))
+                if md is None:
+                    raise RuntimeError("MoorDyn could not read the generated input file")
+                moordyn.SetVerbosity(md, moordyn.LEVEL_ERR)
+                moordyn.Init_NoIC(md, [], [])
+                n_bodies = moordyn.GetNumberBodies(md)
+                n_rods = moordyn.GetNumberRods(md)
+                n_points = moordyn.GetNumberPoints(md)
+                _seed_state(md, tmpdir / "state.bin", lines, built["free_points"], n_bodies, n_rods, n_points)
+            tip_rod = moordyn.GetRod(md, built["tip_rod"])
+            back_rod = moordyn.GetRod(md, built["back_rod"])
+            md_lines = [moordyn.GetLine(md, k + 1) for k in range(len(lines))]
+            n_back = built["back_rod_nseg"]
+            tip0 = np.array(moordyn.GetRodNodePos(tip_rod, 0))
+            wall_setup = time.perf_counter() - t_setup
+
+            t = 0.0
+            n_steps = 0
+            p0 = tip0
+            v0 = np.array(moordyn.GetRodNodeVel(tip_rod, 0))
+            e0 = _axis(moordyn, tip_rod, back_rod, n_back)
+            td = None
+            t_wall = time.perf_counter()
+            with _quiet(log):
+                while t < max_fall - 1e-12:
+                    try:
+                        moordyn.Step(md, [], [], t, dt)
+                    except RuntimeError as exc:
+                        raise SimulationDiverged(t, "MoorDyn", f"non-finite ({exc})") from None
+                    n_steps += 1
+                    t_new = t + dt
+                    p1 = np.array(moordyn.GetRodNodePos(tip_rod, 0))
+                    v1 = np.array(moordyn.GetRodNodeVel(tip_rod, 0))
+                    e1 = _axis(moordyn, tip_rod, back_rod, n_back)
+                    if not np.all(np.isfinite(p1)):
+                        raise SimulationDiverged(t_new, "MoorDyn", "non-finite")
+                    if p1[2] <= -depth:
+                        w = (p0[2] + depth) / (p0[2] - p1[2])
+                        e = e0 + w * (e1 - e0)
+                        e /= np.linalg.norm(e)
+                        td = (t + w * dt, p0 + w * (p1 - p0), v0 + w * (v1 - v0), e)
+                        break
+                    t, p0, v0, e0 = t_new, p1, v1, e1
+            wall = time.perf_counter() - t_wall
+            min_z = min((min(moordyn.GetLineNodePos(ln, i)[2] for i in range(moordyn.GetLineN(ln) + 1))
+                         for ln in md_lines), default=None)
+        finally:
+            if md is not None:
+                with _quiet(log):
+                    moordyn.Close(md)
+    result: dict[str, Any] = {
+        "status": "touchdown" if td is not None else "no touchdown within max_fall_time_s",
+        "touchdown_time_s": None, "touchdown_speed_m_s": None, "touchdown_vertical_speed_m_s": None,
+        "tilt_deg": None, "drift_m": None, "wall_s": wall, "wall_setup_s": wall_setup, "dt_s": dt,
+        "scheme": scheme, "n_steps": n_steps, "n_line_segments": [ln.n_seg for ln in lines],
+        "min_line_z_m": None if min_z is None else float(min_z), "line_types": built["line_types"],
+        "axial_cda_m2": built["axial_cda_m2"], "omega_max_rad_s": built["omega_max_rad_s"],
+        "input_text": built["text"],
+    }
+    if td is not None:
+        t_td, p_td, v_td, e_td = td
+        result.update(
+            touchdown_time_s=float(t_td), touchdown_speed_m_s=float(np.linalg.norm(v_td)),
+            touchdown_vertical_speed_m_s=float(-v_td[2]),
+            tilt_deg=float(math.degrees(math.acos(min(1.0, max(-1.0, -e_td[2]))))),
+            drift_m=float(math.hypot(p_td[0] - tip0[0], p_td[1] - tip0[1])))
+    return result
+
+
+def _axis(moordyn, tip_rod, back_rod, n_back: int) -> np.ndarray:
+    """Unit anchor axis, back tip -> tip."""
+    tip = np.array(moordyn.GetRodNodePos(tip_rod, 0))
+    back = np.array(moordyn.GetRodNodePos(back_rod, n_back))
+    e = tip - back
+    return e / np.linalg.norm(e)

@@ -1,0 +1,71 @@
+"""Figures of a drop: line and anchor snapshots during the fall, tip speed and tilt histories."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from moor_env.physics import layout as L
+from moor_env.simulation import DropResult
+
+
+def plot_drop(result: DropResult, path: str | Path, title: str = "") -> Path:
+    """Write a PNG with snapshots (x-z plane) and speed/tilt histories of a drop.
+
+    Parameters
+    ----------
+    result : DropResult
+        From ``simulate_drop(..., keep_snapshots=True)``.
+    path : str or Path
+        Output PNG file.
+    title : str
+        Figure title.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig = plt.figure(figsize=(12, 6.5), constrained_layout=True)
+    grid = fig.add_gridspec(2, 2, width_ratios=[1.25, 1])
+    ax_scene = fig.add_subplot(grid[:, 0])
+    ax_speed = fig.add_subplot(grid[0, 1])
+    ax_tilt = fig.add_subplot(grid[1, 1])
+    cmap = plt.get_cmap("viridis")
+    snaps = result.snapshots
+    colors = {"vertical_chain": "tab:red", "mooring_line": "tab:blue", "wire": "0.5"}
+    for k, snap in enumerate(snaps):
+        shade = cmap(k / max(len(snaps) - 1, 1))
+        for name, pts in snap["lines"].items():
+            ax_scene.plot(pts[:, 0], pts[:, 2], color=colors.get(name, shade), alpha=0.25 + 0.75 * k / max(len(snaps) - 1, 1),
+                          lw=1.0, label=name if k == 0 else None)
+        if snap["tip"] is not None:
+            ax_scene.plot([snap["back"][0], snap["tip"][0]], [snap["back"][2], snap["tip"][2]], color=shade, lw=4,
+                          solid_capstyle="butt", label=f"anchor t={snap['t']:.1f} s" if k in (0, len(snaps) - 1) else None)
+    hist = result.history
+    if hist.shape[0]:
+        t = hist[:, L.H_TIME] - result.release_time_s
+        speed = np.linalg.norm(hist[:, L.H_TIP_VEL:L.H_TIP_VEL + 3], axis=1)
+        tilt = np.degrees(np.arccos(np.clip(-hist[:, L.H_AXIS + 2], -1.0, 1.0)))
+        ax_speed.plot(t, speed, label="tip speed")
+        ax_speed.plot(t, -hist[:, L.H_TIP_VEL + 2], "--", label="vertical")
+        ax_tilt.plot(t, tilt, color="tab:purple")
+    ax_tilt.axhline(5.0, color="tab:red", ls=":", label="5 deg criterion")
+    ax_tilt.axhline(2.0, color="tab:orange", ls=":", label="2 deg target")
+    ax_scene.set(xlabel="x [m]", ylabel="z [m]", title="snapshots during the fall")
+    ax_scene.set_aspect("equal", adjustable="datalim")
+    ax_scene.legend(fontsize=7, loc="lower right")
+    ax_speed.set(xlabel="time since release [s]", ylabel="speed [m/s]", title="anchor tip speed")
+    ax_speed.legend(fontsize=8)
+    ax_tilt.set(xlabel="time since release [s]", ylabel="tilt [deg]", title="anchor tilt from vertical")
+    ax_tilt.legend(fontsize=8)
+    if result.touchdown_speed_m_s is not None:
+        fig.suptitle(f"{title}  touchdown {result.touchdown_speed_m_s:.2f} m/s, tilt {result.tilt_deg:.2f} deg, "
+                     f"t = {result.touchdown_time_s:.2f} s")
+    else:
+        fig.suptitle(f"{title}  {result.status}")
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
