@@ -30,7 +30,7 @@ from moor_env.physics.integrate import (
     compute_accelerations,
 )
 from moor_env.physics.line import apply_payout
-from moor_env.physics.statics import StaticsReport, solve_equilibrium
+from moor_env.physics.statics import solve_equilibrium
 from moor_env.physics.vessels import jonswap_components, sample_tracks
 
 HISTORY_CAPACITY = 20000

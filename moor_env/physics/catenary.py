@@ -101,7 +101,7 @@ def solve_grounded(dx: float, dz: float, sections: list[Section]) -> tuple[float
     ea0 = sections[0].ea_n
 
     def mismatch(grounded: float) -> float:
-        rest = _trim(sections, grounded)
+        rest = trim(sections, grounded)
         h = _h_for_height(dz, rest)
         x, _ = span(h, 0.0, rest)
         return grounded * (1.0 + h / ea0) + x - dx
@@ -110,10 +110,11 @@ def solve_grounded(dx: float, dz: float, sections: list[Section]) -> tuple[float
     if g_max <= 0.0 or mismatch(0.0) <= 0.0 or mismatch(g_max) >= 0.0:
         return None
     grounded = brentq(mismatch, 0.0, g_max, xtol=1e-10)
-    return _h_for_height(dz, _trim(sections, grounded)), grounded
+    return _h_for_height(dz, trim(sections, grounded)), grounded
 
 
-def _trim(sections: list[Section], grounded: float) -> list[Section]:
+def trim(sections: list[Section], grounded: float) -> list[Section]:
+    """The sections left after removing ``grounded`` metres from end A."""
     out = []
     left = grounded
     for sec in sections:

@@ -20,6 +20,7 @@ import math
 
 from moor_env.physics._jit import jit
 from moor_env.physics.anchor import add_point_load, body_acceleration, body_loads, body_point, rotate_axis
+from moor_env.physics.environment import current_velocity
 from moor_env.physics.hydro import solve_sym3
 from moor_env.physics.layout import (
     BF_S_TIP,
@@ -55,7 +56,6 @@ from moor_env.physics.layout import (
     TD_TIP,
     TD_VEL,
 )
-from moor_env.physics.environment import current_velocity
 from moor_env.physics.line import apply_payout, segment_loads
 from moor_env.physics.seabed import seabed_force
 from moor_env.physics.vessels import track_state

@@ -17,16 +17,15 @@ import numpy as np
 
 from moor_env.physics.layout import (
     EF_CBOT,
+    EF_FRIC_V,
     EF_G,
     EF_KBOT,
-    EF_FRIC_V,
     EF_MU,
     EF_RHO,
     LF_L_MIN_TOP,
     LI_NSEG,
     LI_PAYOUT,
     LI_SEG_START,
-    MF_CAN,
     MF_CDN,
     MF_D,
     MF_EA,

@@ -24,7 +24,8 @@ import scipy.sparse.linalg as spla
 
 from moor_env.errors import StaticsNotConverged
 from moor_env.physics import layout as L
-from moor_env.physics.integrate import compute_accelerations, set_constrained_nodes
+from moor_env.physics.catenary import Section, shape, solve_grounded, solve_suspended, trim
+from moor_env.physics.integrate import set_constrained_nodes
 
 
 @dataclass
@@ -318,8 +319,6 @@ def _commit_axis(prob: _Problem, x: np.ndarray, axis0: np.ndarray, sim) -> None:
 # --- first guesses from the analytic elastic catenary ----------------------------------------------------------
 def _line_sections(sim, line_name: str) -> tuple[list, np.ndarray]:
     """Catenary sections and the unstretched arc length of each interior node of a line (bottom to top)."""
-    from moor_env.physics.catenary import Section
-
     st, m = sim.state, sim.model
     idx = m.lines[line_name].index
     start, nseg = st.line_i[idx, L.LI_SEG_START], st.line_i[idx, L.LI_NSEG]
@@ -339,8 +338,6 @@ def _line_sections(sim, line_name: str) -> tuple[list, np.ndarray]:
 
 def _place_line(sim, line_name: str, origin: np.ndarray, h: float, v_a: float, direction: float = 1.0) -> None:
     """Put a line's interior nodes on the catenary (H, V_A) starting at ``origin`` (its bottom end)."""
-    from moor_env.physics.catenary import shape
-
     st, m = sim.state, sim.model
     sections, arcs = _line_sections(sim, line_name)
     x, z = shape(h, v_a, sections, arcs)
@@ -362,8 +359,6 @@ def first_guess(sim) -> None:
 
 
 def _guess_catenary_line(sim) -> None:
-    from moor_env.physics.catenary import solve_grounded, solve_suspended
-
     st, m = sim.state, sim.model
     idx = m.lines["line"].index
     a = st.node_pos[st.line_i[idx, L.LI_BOTTOM]].copy()
@@ -376,16 +371,7 @@ def _guess_catenary_line(sim) -> None:
         _place_line(sim, "line", a, h, v_a)
         return
     h, length_on_bottom = grounded
-    from moor_env.physics.catenary import Section, shape
-
-    rest: list = []
-    left = length_on_bottom
-    for sec in sections:
-        if left >= sec.length_m:
-            left -= sec.length_m
-            continue
-        rest.append(Section(sec.weight_n_m, sec.ea_n, sec.length_m - left))
-        left = 0.0
+    rest = trim(sections, length_on_bottom)
     x_s, z_s = shape(h, 0.0, rest, np.maximum(arcs - length_on_bottom, 0.0))
     ea0 = sections[0].ea_n
     on_bottom = arcs <= length_on_bottom
@@ -397,8 +383,6 @@ def _guess_catenary_line(sim) -> None:
 
 
 def _guess_installation(sim) -> None:
-    from moor_env.physics.catenary import shape, solve_suspended
-
     st, m = sim.state, sim.model
     g = sim.env_f[L.EF_G]
     rho = sim.env_f[L.EF_RHO]
