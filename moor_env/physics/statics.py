@@ -69,6 +69,7 @@ class _Problem:
         if self.body:
             vertex[kinds == L.NODE_BODY] = body_vertex
         vertex_of = vertex[owner]
+        self.vertex_of = vertex_of
         n_vert = self.free.size + (1 if self.body else 0)
         nbrs: list[set[int]] = [set() for _ in range(n_vert)]
         for s in np.nonzero(st.seg_i[:, L.SI_ACTIVE])[0]:
@@ -151,6 +152,38 @@ class _Problem:
         return mass, weight
 
     def jacobian(self, x: np.ndarray, r0: np.ndarray, axis0: np.ndarray, eps_m: float, eps_rad: float):
+        """Finite-difference Jacobian of the residual plus the elastic stiffness EA/l0 q q^T of every slack
+        segment between free nodes (inexact Newton, as usual in cable statics): with the exact law's zero
+        stiffness a node between two slack segments would look unsupported to Newton's method."""
+        return self._fd_jacobian(x, r0, axis0, eps_m, eps_rad) - self._slack_stiffness()
+
+    def _slack_stiffness(self):
+        st = self.sim.state
+        mat_f = self.sim.model.mat_f
+        segs = np.nonzero(st.seg_i[:, L.SI_ACTIVE])[0]
+        a = st.seg_i[segs, L.SI_A]
+        b = st.seg_i[segs, L.SI_B]
+        d = st.node_pos[b] - st.node_pos[a]
+        length = np.linalg.norm(d, axis=1)
+        l0 = st.seg_f[segs, L.SF_L0]
+        slack = (length <= l0) & (length > 0)
+        va, vb = self.vertex_of[a[slack]], self.vertex_of[b[slack]]
+        q = d[slack] / length[slack, None]
+        k = mat_f[st.seg_i[segs[slack], L.SI_MAT], L.MF_EA] / l0[slack]
+        blocks = k[:, None, None] * q[:, :, None] * q[:, None, :]
+        rows, cols, vals = [], [], []
+        for i in range(blocks.shape[0]):
+            for u, w, sign in ((va[i], va[i], 1.0), (vb[i], vb[i], 1.0), (va[i], vb[i], -1.0), (vb[i], va[i], -1.0)):
+                if u < 0 or w < 0 or u >= self.free.size or w >= self.free.size:
+                    continue
+                for r in range(3):
+                    for c in range(3):
+                        rows.append(3 * u + r)
+                        cols.append(3 * w + c)
+                        vals.append(sign * blocks[i, r, c])
+        return sp.csc_matrix((vals, (rows, cols)), shape=(self.n_dofs, self.n_dofs))
+
+    def _fd_jacobian(self, x: np.ndarray, r0: np.ndarray, axis0: np.ndarray, eps_m: float, eps_rad: float):
         rows, cols, vals = [], [], []
         n_colors = int(self.colors.max()) + 1 if self.colors.size else 0
         for c in range(1, n_colors):
@@ -201,33 +234,52 @@ def _rotate(axis: np.ndarray, phi: np.ndarray) -> np.ndarray:
 
 
 FINAL_SLACK_SMOOTHING = 1e-8
+CONTINUATION_ITERATIONS = 30  # per intermediate smoothing level; only the final level must converge
 
 
 def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 300, max_step_m: float = 20.0,
-                      tau0_s: float = 0.5, slack_smoothing: float = 1e-4, warm: bool = False) -> StaticsReport:
+                      warm: bool = False, analytic_guess: bool = True) -> StaticsReport:
     """Drive the simulator's current state to static equilibrium in place.
 
-    The tension-only law has a kink at zero strain that stalls Newton's method wherever a line carries
-    almost nothing (the bottom of a chain loop carries only its small horizontal force, a strain of order
-    1e-6). The solve therefore starts from an analytic catenary guess and continues over a smoothed law
-    EA (strain + sqrt(strain^2 + s^2)) / 2 with s = ``slack_smoothing``, 10x smaller each phase, down to
-    s = 1e-8 (``FINAL_SLACK_SMOOTHING``). At that scale the smoothed law differs from the exact one by less than
-    EA * 1e-8 / 2 (9 N for the 142 mm chain) on a fully slack segment and by far less on any taut one, so the
-    static state is a rest state of the dynamic model to within that force.
+    Strategy (each stage is cheap when the previous one did its job):
 
-    ``warm`` starts from the current state (no analytic guess, final phase only), for small changes of an
-    equilibrium. See :func:`_solve_phase` for the other parameters.
+    1. an analytic elastic-catenary first guess (``analytic_guess``; otherwise the current state is used,
+       however poor);
+    2. a short kinetic-damping dynamic relaxation (:func:`relax_dynamically`) with the dynamic kernel, which
+       settles the near-slack bottom of a chain loop where the tension-only kink stalls Newton's method;
+    3. pseudo-transient Newton (:func:`_solve_phase`) on a smoothed slack law EA (e + sqrt(e^2 + s^2)) / 2,
+       s = 1e-6 then ``FINAL_SLACK_SMOOTHING`` = 1e-8 (it then differs from the exact law by less than
+       EA * 1e-8 / 2, 9 N for the 142 mm chain, on a fully slack segment, and by far less on taut ones), with the
+       elastic stiffness of slack segments in the Jacobian;
+    4. if Newton fails: a long relaxation (up to 120 s simulated) and Newton again.
+
+    ``warm`` skips stages 1-2 for small changes of an equilibrium (e.g. a corrected wire length).
     """
-    iterations = 0
-    smoothing = 10 * FINAL_SLACK_SMOOTHING if warm else slack_smoothing
     if warm:
-        tau0_s = 1e3
-    else:
+        try:
+            return _continuation(sim, 1e-7, tol_rel, max_iter, max_step_m, 1.0)
+        except StaticsNotConverged:
+            pass
+    elif analytic_guess:
         first_guess(sim)
+    saved = sim.state.copy()
+    relax_dynamically(sim, max_time_s=2.0)
+    try:
+        return _continuation(sim, 1e-6, tol_rel, max_iter, max_step_m, 1.0)
+    except StaticsNotConverged:
+        sim.state = saved
+        relax_dynamically(sim)
+        return _continuation(sim, 1e-6, tol_rel, max_iter, max_step_m, 1.0)
+
+
+def _continuation(sim, smoothing: float, tol_rel: float, max_iter: int, max_step_m: float,
+                  tau0_s: float) -> StaticsReport:
+    iterations = 0
     try:
         while smoothing > FINAL_SLACK_SMOOTHING * 1.0001:
             sim.env_f[L.EF_SLACK_SMOOTHING] = smoothing
-            iterations += _solve_phase(sim, 10 * tol_rel, max_iter, max_step_m, tau0_s, strict=False).iterations
+            iterations += _solve_phase(sim, 10 * tol_rel, CONTINUATION_ITERATIONS, max_step_m, tau0_s,
+                                       strict=False).iterations
             smoothing *= 0.1
             tau0_s = 1e3
         sim.env_f[L.EF_SLACK_SMOOTHING] = FINAL_SLACK_SMOOTHING
@@ -308,6 +360,50 @@ def _solve_phase(sim, tol_rel: float, max_iter: int, max_step_m: float, tau0_s: 
         return StaticsReport(max_iter, float(np.abs(r).max()), step_norm, prob.n_dofs)
     raise StaticsNotConverged(
         f"static equilibrium not reached in {max_iter} iterations (largest residual/weight {np.max(np.abs(r) / weight):.3g})")
+
+
+def relax_dynamically(sim, max_time_s: float = 120.0, chunk_steps: int = 25, tol_rel: float = 5e-3) -> float:
+    """Kinetic-damping dynamic relaxation with the dynamic kernel: integrate from the current state and zero
+    every velocity whenever the total kinetic energy starts to fall (it has just passed an energy peak, the
+    best estimate of the rest position along the dominant motion). Robust from any guess, linear in cost;
+    used when Newton cannot start from the guess.
+
+    Returns the simulated relaxation time [s] used. The state's time and the blow-up limits are restored.
+    """
+    st = sim.state
+    limits = sim.env_f[L.EF_SPEED_LIMIT], sim.env_f[L.EF_STRAIN_LIMIT]
+    sim.env_f[L.EF_SPEED_LIMIT] = 1e9
+    sim.env_f[L.EF_STRAIN_LIMIT] = 1e9
+    prob = _Problem(sim)
+    previous = 0.0
+    elapsed = 0.0
+    try:
+        while elapsed < max_time_s:
+            st.t = 0.0  # vessels stay at their mean positions: no wave ramp, no spacing move
+            sim.advance_to(chunk_steps * sim.dt)
+            elapsed += chunk_steps * sim.dt
+            free = st.node_i[:, L.NI_KIND] == L.NODE_FREE
+            kinetic = float(np.sum(sim.work.node_mass[free] * np.sum(st.node_vel[free] ** 2, axis=1)))
+            if sim.model.body_active:
+                kinetic += sim.model.body_f[L.BF_MASS_AXIAL] * float(st.body_state[L.BS_VEL:L.BS_VEL + 3] @ st.body_state[L.BS_VEL:L.BS_VEL + 3])
+            if kinetic < previous:
+                st.node_vel[:] = 0.0
+                st.body_state[L.BS_VEL:L.BS_VEL + 3] = 0.0
+                st.body_state[L.BS_OMEGA:L.BS_OMEGA + 3] = 0.0
+                previous = 0.0
+                r = prob.residual()
+                _, weight = prob.scales()
+                if np.max(np.abs(r) / weight) < tol_rel:
+                    break
+            else:
+                previous = kinetic
+    finally:
+        sim.env_f[L.EF_SPEED_LIMIT], sim.env_f[L.EF_STRAIN_LIMIT] = limits
+        st.t = 0.0
+        st.node_vel[:] = 0.0
+        st.body_state[L.BS_VEL:L.BS_VEL + 3] = 0.0
+        st.body_state[L.BS_OMEGA:L.BS_OMEGA + 3] = 0.0
+    return elapsed
 
 
 def _commit_axis(prob: _Problem, x: np.ndarray, axis0: np.ndarray, sim) -> None:
