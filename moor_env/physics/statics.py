@@ -255,6 +255,8 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 300, max_step_
 
     ``warm`` skips stages 1-2 for small changes of an equilibrium (e.g. a corrected wire length).
     """
+    if _Problem(sim).n_dofs == 0:  # nothing to solve (e.g. an anchor held at its drop height, no lines)
+        return StaticsReport(0, 0.0, 0.0, 0)
     if warm:
         try:
             return _continuation(sim, 1e-7, tol_rel, max_iter, max_step_m, 1.0)

@@ -52,3 +52,11 @@ def test_terminal_velocity_against_seed():
     A 450 m fall reaches 99.99 % of terminal velocity. Tolerance 4 %."""
     result = simulate_drop("anchor-only", {"drop_height_m": 450.0})
     assert result.touchdown_speed_m_s == pytest.approx(33.3, rel=0.04)
+
+
+def test_anchor_only_starts_at_the_drop_height():
+    """The anchor alone has no static unknowns: it must start exactly at the set drop height."""
+    from moor_env import solve_statics
+
+    static = solve_statics(load_scene("anchor-only"))
+    assert static.tip_height_above_seabed_m == pytest.approx(68.5, abs=1e-9)
