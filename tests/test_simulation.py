@@ -61,3 +61,32 @@ def test_cli_static_json():
     data = json.loads(proc.stdout)
     assert data["release_point_m"][2] == pytest.approx(-368.5, abs=1.5)
     assert set(data["top_tensions_n"]) == {"vertical_chain", "mooring_line", "wire"}
+
+
+def test_kept_wire_recoils_after_release():
+    """With keep_wire_after_release the cut wire springs back: its end rises by about its static stretch
+    (1.5 m at 500 m, seed 003 Table 14-7) while the anchor falls."""
+    from moor_env.simulation import run_drop
+
+    scene = load_scene("gjoa-500", {"installation.components.keep_wire_after_release": True})
+    sim = solve_statics(scene).simulator
+    wire_end = sim.model.wire_end_node
+    z0 = sim.state.node_pos[wire_end, 2]
+    result = run_drop(sim)
+    assert result.status == "touchdown"
+    assert sim.state.node_pos[wire_end, 2] > z0 + 0.5
+
+
+def test_second_vessel_moves_before_release():
+    """A spacing rate moves the second vessel at that speed; the release point follows it (pulled by the line)."""
+    from moor_env.physics import layout as L
+    from moor_env.simulation import run_drop
+
+    scene = load_scene("gjoa-500", {"release_time_s": 20.0, "installation.spacing_rate_m_s": 1.0})
+    static = solve_statics(scene)
+    x0 = static.release_point_m[0]
+    sim = static.simulator
+    result = run_drop(sim)
+    top = sim.state.line_i[sim.model.lines["mooring_line"].index, L.LI_TOP]
+    assert sim.state.node_pos[top, 0] > 50.0 + 20.0
+    assert result.release_point_m[0] > x0
