@@ -29,8 +29,7 @@ from moor_env.physics.integrate import (
     advance,
     compute_accelerations,
 )
-from moor_env.physics.line import apply_payout
-from moor_env.physics.statics import solve_equilibrium
+from moor_env.physics.statics import change_line_length, solve_equilibrium
 from moor_env.physics.vessels import jonswap_components, sample_tracks
 
 HISTORY_CAPACITY = 20000
@@ -381,11 +380,7 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3) -> StaticResu
             if abs(err) < tol_m:
                 break
             if model.wire_end_node >= 0:
-                wire = model.lines["wire"].index
-                sim.state.line_f[wire, L.LF_RATE] = err
-                apply_payout(1.0, sim.state.node_pos, sim.state.node_vel, sim.state.node_i, sim.state.seg_i,
-                             sim.state.seg_f, sim.state.line_i, sim.state.line_f)
-                sim.state.line_f[wire, L.LF_RATE] = 0.0
+                change_line_length(sim.state, model.lines["wire"].index, err)
             else:
                 sim.state.node_pos[model.release_node, 2] -= err
             iterations += solve_equilibrium(sim, warm=True).iterations

@@ -234,7 +234,8 @@ def _rotate(axis: np.ndarray, phi: np.ndarray) -> np.ndarray:
 
 
 FINAL_SLACK_SMOOTHING = 1e-8
-CONTINUATION_ITERATIONS = 30  # per intermediate smoothing level; only the final level must converge
+CONTINUATION_ITERATIONS = 30
+RELAXATION_ROUNDS = 10  # of 30 s simulated each  # per intermediate smoothing level; only the final level must converge
 
 
 def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 300, max_step_m: float = 20.0,
@@ -251,7 +252,7 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 300, max_step_
        s = 1e-6 then ``FINAL_SLACK_SMOOTHING`` = 1e-8 (it then differs from the exact law by less than
        EA * 1e-8 / 2, 9 N for the 142 mm chain, on a fully slack segment, and by far less on taut ones), with the
        elastic stiffness of slack segments in the Jacobian;
-    4. if Newton fails: a long relaxation (up to 120 s simulated) and Newton again.
+    4. if Newton fails: rounds of 30 s relaxation and Newton, up to ``RELAXATION_ROUNDS``.
 
     ``warm`` skips stages 1-2 for small changes of an equilibrium (e.g. a corrected wire length).
     """
@@ -264,14 +265,20 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 300, max_step_
             pass
     elif analytic_guess:
         first_guess(sim)
-    saved = sim.state.copy()
     relax_dynamically(sim, max_time_s=2.0)
     try:
         return _continuation(sim, 1e-6, tol_rel, max_iter, max_step_m, 1.0)
     except StaticsNotConverged:
-        sim.state = saved
-        relax_dynamically(sim)
-        return _continuation(sim, 1e-6, tol_rel, max_iter, max_step_m, 1.0)
+        pass
+    # large changes from the guess (a strong current pushes the hanging system tens of metres): alternate
+    # relaxation, which moves the slow pendulum-like modes, with Newton, which finishes once close
+    for _ in range(RELAXATION_ROUNDS):
+        relax_dynamically(sim, max_time_s=30.0)
+        try:
+            return _continuation(sim, 1e-6, tol_rel, 150, max_step_m, 1.0)
+        except StaticsNotConverged:
+            continue
+    raise StaticsNotConverged(f"static equilibrium not reached after {RELAXATION_ROUNDS} relaxation rounds")
 
 
 def _continuation(sim, smoothing: float, tol_rel: float, max_iter: int, max_step_m: float,
@@ -480,6 +487,15 @@ def _guess_catenary_line(sim) -> None:
     st.node_pos[nodes, 2] = a[2] + z
 
 
+def change_line_length(state, line: int, delta_m: float) -> None:
+    """Lengthen (or shorten) a line's unstretched length by ``delta_m`` by scaling all its segments alike,
+    so that no segment leaves the stable length range however large the change (e.g. a 15 m wire stretch
+    over 10 m segments)."""
+    start, nseg = state.line_i[line, L.LI_SEG_START], state.line_i[line, L.LI_NSEG]
+    lengths = state.seg_f[start:start + nseg, L.SF_L0]
+    lengths *= 1.0 + delta_m / lengths.sum()
+
+
 def _guess_installation(sim) -> None:
     st, m = sim.state, sim.model
     g = sim.env_f[L.EF_G]
@@ -510,8 +526,7 @@ def _guess_installation(sim) -> None:
             moved = float(np.linalg.norm(new - release))
             release = new
             tip_error = release[2] - vc_rise[0] - m.body_f[L.BF_LENGTH] - target_tip_z
-            top_seg = st.line_i[wire, L.LI_SEG_START] + st.line_i[wire, L.LI_NSEG] - 1
-            st.seg_f[top_seg, L.SF_L0] += tip_error
+            change_line_length(st, wire, tip_error)
             if moved < 1e-7 and abs(tip_error) < 1e-7:
                 break
         st.node_pos[m.release_node] = release
