@@ -213,7 +213,7 @@ class DiscretizationConfig(_Strict):
     fibre_segment_m: float = Field(5.0, ge=0.1, le=200.0)
     wire_segment_m: float = Field(10.0, ge=0.1, le=500.0)
     catenary_segment_m: float = Field(2.0, ge=0.1, le=200.0)
-    integrator: Literal["symplectic_euler", "rk2"] = "symplectic_euler"
+    integrator: Literal["symplectic_euler", "rk2", "implicit_euler"] = "symplectic_euler"
     dt_s: float | None = Field(None, gt=0.0, le=1.0, description="time step [s]; None derives it from the stability limit")
     dt_safety: float = Field(0.9, gt=0.0, le=1.0, description="fraction of the stability limit used when dt_s is derived")
 

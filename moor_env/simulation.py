@@ -24,6 +24,7 @@ from moor_env.physics.integrate import (
     FAIL_BODY,
     FAIL_NODE,
     FAIL_SEGMENT,
+    INTEGRATOR_IMPLICIT_EULER,
     INTEGRATOR_RK2,
     INTEGRATOR_SYMPLECTIC_EULER,
     advance,
@@ -94,7 +95,8 @@ class Simulator:
                               node_f=model.node_f.copy(), seg_i=model.seg_i.copy(), seg_f=model.seg_f.copy(),
                               line_i=model.line_i.copy(), line_f=model.line_f.copy())
         self.dt = model.dt_s
-        self.integrator_code = INTEGRATOR_RK2 if model.integrator == "rk2" else INTEGRATOR_SYMPLECTIC_EULER
+        self.integrator_code = {"rk2": INTEGRATOR_RK2, "implicit_euler": INTEGRATOR_IMPLICIT_EULER}.get(
+            model.integrator, INTEGRATOR_SYMPLECTIC_EULER)
         self.vessel_mean_m = model.vessel_base_m.copy()
         self.tracks = np.zeros((1, 2, 6))
         self.sea = _sea_components(model.scene)

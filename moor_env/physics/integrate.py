@@ -22,6 +22,7 @@ from moor_env.physics._jit import jit
 from moor_env.physics.anchor import add_point_load, body_acceleration, body_loads, body_point, rotate_axis
 from moor_env.physics.environment import current_velocity
 from moor_env.physics.hydro import solve_sym3
+from moor_env.physics.implicit import implicit_euler_update
 from moor_env.physics.layout import (
     BF_S_TIP,
     BS_AXIS,
@@ -62,6 +63,7 @@ from moor_env.physics.vessels import track_state
 
 INTEGRATOR_SYMPLECTIC_EULER = 0
 INTEGRATOR_RK2 = 1
+INTEGRATOR_IMPLICIT_EULER = 2  # linearly implicit backward Euler for the lines (physics/implicit.py)
 
 FAIL_NONE = 0
 FAIL_NODE = 1
@@ -241,6 +243,12 @@ def step(t, dt, integrator, body_active, node_pos, node_vel, body_state, node_i,
             wy = body0[BS_OMEGA + 1] + dt * body_acc[4]
             wz = body0[BS_OMEGA + 2] + dt * body_acc[5]
             body_v2 = _kick_drift_body(body_state, body_acc, body0, dt, dt, wx, wy, wz, dt)
+    elif integrator == INTEGRATOR_IMPLICIT_EULER:
+        vmax2, worst_node, body_v2 = implicit_euler_update(dt, body_active, node_pos, node_vel, body_state, node_i,
+                                                           node_f, seg_i, seg_f, mat_f, body_f, env_f,
+                                                           current_profile, node_force, node_mm, node_mass,
+                                                           node_contact, node_acc, seg_tension, body_acc, pos0,
+                                                           vel0, body0)
     else:
         for n in range(node_i.shape[0]):
             for c in range(3):

@@ -1,0 +1,769 @@
+"""Linearly implicit (Rosenbrock-type) backward Euler step for the line nodes, coupled to the explicit anchor.
+
+Why: the explicit integrators are limited by the axial mode of one chain segment, omega = 2 sqrt(EA/w)/l
+(about 4000 rad/s for 1 m of 142 mm chain, dt ~ 0.34 ms). Here the stiff parts are linearised and solved
+for, so the step is limited by accuracy only (see ``stability.implicit_time_step``).
+
+One step of length h from (x, v), loads F(x, v) evaluated by ``compute_accelerations`` (added mass in the
+node mass matrix M). With K = -dF/dx and C = -dF/dv of the linearised parts (both symmetric, >= 0)::
+
+    (M + h C + h^2 K) dv = h F - h^2 K v,        v1 = v + dv,        x1 = x + h v1
+
+i.e. one Newton iteration of backward Euler on the momentum equations, with the stiff terms evaluated at
+(x1, v1). Backward Euler is L-stable: unresolved modes (the axial waves) are damped out, never amplified, and a
+segment snapping taut within a step is an inelastic event. Linearised (implicit) parts:
+
+- axial spring-damper of every segment in the step's active (taut) set: K_s = EA/l0 q q^T + (T/len)(I - q q^T),
+  C_s = BA/l0 q q^T (the geometric term keeps the transverse string and pendulum modes implicit too). Segments
+  outside the set carry no tension (the tension-only law). The set is predicted to the *end* of the step: start
+  from the segments taut now, solve, predict every segment's strain and tension at the end of the step from the
+  solution (both > 0: taut), and solve again while segments change set (each may change once per step, at most
+  ``MAX_ACTIVE_SET_SOLVES`` solves; typically 1-2). A segment entering the set brings its linear law
+  (unclipped, so the solve sees where it goes taut), one leaving it no tension. Without this, a segment going
+  taut inside a step was stretched explicitly and sprang back elastically in the next one, and on a slack
+  chain these snaps ran along it one segment per step and grew until the strain limit;
+- line drag per half segment (the exact 3x3 Jacobian of the Morison drag, skipped where h times its damping
+  rate is below ``DRAG_SKIP`` of the node mass, i.e. where explicit drag is far from any limit); point-mass
+  drag;
+- seabed contact (vertical spring-damper) and regularised Coulomb friction (its damping slope below the
+  friction velocity, its transverse slope above it);
+- the anchor through the node at its back tip: the anchor's own loads stay explicit (it is heavy and its
+  drag is not stiff), but the line's reaction on it is solved with the lines. After the line tree hanging
+  from the body node p is eliminated it is a 3x3 impedance S_p and impulse rho_p at p; with the anchor's
+  point mobility W = J M_b^-1 J^T (axial 1/M_ax, normal (m22 - 2 s m12 + s^2 m11)/det) and the explicit body
+  velocity increment u0 at p, the line impulse on the anchor f solves (I + S_p W) f = rho_p - S_p u0. Only the
+  first body node is coupled so (compile time refuses a second attachment); others count as prescribed.
+
+Weight, buoyancy and everything else are explicit. The anchor is then advanced like symplectic Euler with its
+corrected acceleration; nodes set from the anchor, vessels and welded parents are placed by the caller.
+
+Solver: the node graph (welded nodes merged into their parent, vessel/fixed nodes prescribed, the body node
+as the root of its component) is a tree, so the block system is solved in O(N) without fill-in by block
+Gaussian elimination leaves first. The ordering is rebuilt every step (payout and release change the
+topology) by peeling leaves: each node keeps its degree and the *sums* of its neighbours' and segments'
+indices; when its degree is 1 those sums are its parent and its parent segment. A closed loop of lines is
+refused at compile time (``stability.implicit_time_step``); should one appear anyway, it is broken by lagging
+the coupling of its extra edges (their stiffness stays on the diagonal), which keeps the solve defined but is
+not stable for stiff lines.
+
+Scratch memory (no new workspace arrays, no allocation per step, ``advance``'s signature unchanged): the step
+reuses the simulator's workspace. ``node_mm`` holds the diagonal blocks and, after elimination, their
+inverses; ``node_acc`` the right-hand sides and finally dv/h (the effective acceleration of the step);
+``pos0``/``vel0`` (the RK2 midpoint's scratch, otherwise unused) are viewed as int64 for the tree ordering and
+the active set. ``node_force``, ``node_mass``, ``node_contact`` and ``seg_tension`` keep the loads at the
+start of the step, as after an explicit step; ``node_mm`` does not hold the added mass afterwards: call
+``compute_accelerations`` (the simulator's ``evaluate_loads``) for loads, as every output already does.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from moor_env.physics._jit import jit
+from moor_env.physics.anchor import rotate_axis
+from moor_env.physics.environment import current_velocity
+from moor_env.physics.hydro import add_slender_added_mass
+from moor_env.physics.layout import (
+    BF_M11,
+    BF_M12,
+    BF_M22,
+    BF_MASS_AXIAL,
+    BS_AXIS,
+    BS_OMEGA,
+    BS_POS,
+    BS_VEL,
+    EF_CBOT,
+    EF_DEPTH,
+    EF_FRIC_V,
+    EF_KBOT,
+    EF_MU,
+    EF_RHO,
+    MF_CAN,
+    MF_CAT,
+    MF_CDN,
+    MF_CDT,
+    MF_D,
+    MF_EA,
+    MF_MASS,
+    MF_ZETA,
+    NF_BODY_S,
+    NF_POINT_CA,
+    NF_POINT_CDA,
+    NF_POINT_VOLUME,
+    NI_KIND,
+    NI_REF,
+    NODE_BODY,
+    NODE_FREE,
+    NODE_WELDED,
+    SF_L0,
+    SI_A,
+    SI_ACTIVE,
+    SI_B,
+    SI_MAT,
+)
+
+# int64 views of pos0 (TR_*) and vel0 (OR_*)
+TR_DEG = 0  # remaining degree; -1 once eliminated below its parent, -2 once eliminated as a root
+TR_NB = 1  # sum of remaining neighbour indices (the parent once the degree is 1)
+TR_SEG = 2  # sum of remaining segment indices (the parent segment once the degree is 1)
+OR_ORDER = 0  # elimination order (row k: k-th node eliminated)
+OR_EFF = 1  # effective unknown of a node: itself (free / body root), its parent (welded), or -1 (prescribed)
+OR_FLAGS = 2  # word s >> 5, bits 2 (s & 31) and 2 (s & 31) + 1: segment s is taut / has changed set
+
+MAX_ACTIVE_SET_SOLVES = 8
+SET_TOLERANCE = 1e-6  # strain by which a segment must miss its predicted set before the step is solved again
+DRAG_SKIP = 0.02  # drag of a half segment is linearised only where h * (its damping rate) exceeds this
+
+
+@jit
+def _inv_sym3(a11, a22, a33, a12, a13, a23):
+    """Inverse of the symmetric 3x3 [[a11, a12, a13], [a12, a22, a23], [a13, a23, a33]] as 6 entries."""
+    c11 = a22 * a33 - a23 * a23
+    c12 = a13 * a23 - a12 * a33
+    c13 = a12 * a23 - a13 * a22
+    c22 = a11 * a33 - a13 * a13
+    c23 = a12 * a13 - a11 * a23
+    c33 = a11 * a22 - a12 * a12
+    inv = 1.0 / (a11 * c11 + a12 * c12 + a13 * c13)
+    return c11 * inv, c22 * inv, c33 * inv, c12 * inv, c13 * inv, c23 * inv
+
+
+@jit
+def _add_sym(mm, n, xx, yy, zz, xy, xz, yz):
+    mm[n, 0] += xx
+    mm[n, 1] += yy
+    mm[n, 2] += zz
+    mm[n, 3] += xy
+    mm[n, 4] += xz
+    mm[n, 5] += yz
+
+
+@jit
+def _is_active(orow, s):
+    """Bit 2s of the flag words: segment s is in the active (taut) set (the words hold 32 segments per node;
+    a segment beyond that, which no compiled model has, is never active and so stays explicit)."""
+    if (s >> 5) >= orow.shape[0]:
+        return 0
+    return (orow[s >> 5, OR_FLAGS] >> (2 * (s & 31))) & 1
+
+
+@jit
+def _is_frozen(orow, s):
+    """Bit 2s + 1: segment s has already changed set once in this step."""
+    return (orow[s >> 5, OR_FLAGS] >> (2 * (s & 31) + 1)) & 1
+
+
+@jit
+def _flip(orow, s):
+    """Toggle the active bit of segment s and freeze it for the rest of the step."""
+    orow[s >> 5, OR_FLAGS] ^= np.int64(1) << (2 * (s & 31))
+    orow[s >> 5, OR_FLAGS] |= np.int64(1) << (2 * (s & 31) + 1)
+
+
+@jit
+def _segment_gain(s, h, orow, node_pos, seg_i, seg_f, mat_f, seg_tension):
+    """G_s = h C_s + h^2 K_s = alpha q q^T + beta I of an active segment, with its unit tangent.
+
+    Returns (alpha, beta, qx, qy, qz, kq, kt), with K_s = kq q q^T + kt (I - q q^T) [N/m]; zeros for a
+    segment outside the active set.
+    """
+    if _is_active(orow, s) == 0:
+        return 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0
+    a = seg_i[s, SI_A]
+    b = seg_i[s, SI_B]
+    m = seg_i[s, SI_MAT]
+    l0 = seg_f[s, SF_L0]
+    dx = node_pos[b, 0] - node_pos[a, 0]
+    dy = node_pos[b, 1] - node_pos[a, 1]
+    dz = node_pos[b, 2] - node_pos[a, 2]
+    length = math.sqrt(dx * dx + dy * dy + dz * dz)
+    qx = dx / length
+    qy = dy / length
+    qz = dz / length
+    ea = mat_f[m, MF_EA]
+    kq = ea / l0
+    cq = mat_f[m, MF_ZETA] * math.sqrt(ea * mat_f[m, MF_MASS])  # BA / l0
+    kt = seg_tension[s] / length
+    alpha = h * cq + h * h * (kq - kt)
+    beta = h * h * kt
+    return alpha, beta, qx, qy, qz, kq, kt
+
+
+@jit
+def _drag_jacobian(mm, n, h, vrx, vry, vrz, qx, qy, qz, cn, ct):
+    """Add h * (-d drag / d v) of a slender piece (cn = 1/2 rho Cd_n D len, ct = 1/2 rho Cd_t pi D len)."""
+    vt = vrx * qx + vry * qy + vrz * qz
+    nx = vrx - vt * qx
+    ny = vry - vt * qy
+    nz = vrz - vt * qz
+    vn = math.sqrt(nx * nx + ny * ny + nz * nz)
+    # cn (|vn| (I - q q^T) + vn vn^T / |vn|) + 2 ct |vt| q q^T
+    iso = h * cn * vn
+    qq = h * 2.0 * ct * abs(vt) - iso
+    nn = h * cn / vn if vn > 0.0 else 0.0
+    _add_sym(mm, n, iso + qq * qx * qx + nn * nx * nx, iso + qq * qy * qy + nn * ny * ny,
+             iso + qq * qz * qz + nn * nz * nz, qq * qx * qy + nn * nx * ny, qq * qx * qz + nn * nx * nz,
+             qq * qy * qz + nn * ny * nz)
+
+
+@jit
+def _setup(body_node, node_i, seg_i, seg_tension, tree, orow):
+    """Effective unknown of every node, tree degrees and neighbour/segment sums, initial active set."""
+    nn = node_i.shape[0]
+    for n in range(nn):
+        kind = node_i[n, NI_KIND]
+        eff = -1
+        if kind == NODE_FREE or n == body_node:
+            eff = n
+        elif kind == NODE_WELDED:
+            p = node_i[n, NI_REF]
+            if node_i[p, NI_KIND] == NODE_FREE or p == body_node:
+                eff = p
+        orow[n, OR_EFF] = eff
+        orow[n, OR_FLAGS] = 0
+        tree[n, TR_DEG] = 0
+        tree[n, TR_NB] = 0
+        tree[n, TR_SEG] = 0
+    for s in range(seg_i.shape[0]):
+        if seg_i[s, SI_ACTIVE] == 0:
+            continue
+        ea = orow[seg_i[s, SI_A], OR_EFF]
+        eb = orow[seg_i[s, SI_B], OR_EFF]
+        if ea == eb:
+            continue  # both prescribed, or a welded node and its parent: internal
+        if seg_tension[s] > 0.0 and (s >> 5) < nn:
+            orow[s >> 5, OR_FLAGS] |= np.int64(1) << (2 * (s & 31))
+        if ea >= 0 and eb >= 0:
+            tree[ea, TR_DEG] += 1
+            tree[ea, TR_NB] += eb
+            tree[ea, TR_SEG] += s
+            tree[eb, TR_DEG] += 1
+            tree[eb, TR_NB] += ea
+            tree[eb, TR_SEG] += s
+
+
+@jit
+def _order(body_node, node_i, seg_i, tree, orow):
+    """Leaves-first elimination order into orow[:, OR_ORDER]; returns the number of unknowns ordered."""
+    nn = node_i.shape[0]
+    n_unknown = 0
+    nq = 0
+    for n in range(nn):
+        if orow[n, OR_EFF] == n and n != body_node:
+            n_unknown += 1
+            if tree[n, TR_DEG] <= 1:
+                orow[nq, OR_ORDER] = n
+                nq += 1
+    head = 0
+    while True:
+        while head < nq:
+            c = orow[head, OR_ORDER]
+            head += 1
+            if tree[c, TR_DEG] == 1:
+                p = tree[c, TR_NB]
+                tree[p, TR_DEG] -= 1
+                tree[p, TR_NB] -= c
+                tree[p, TR_SEG] -= tree[c, TR_SEG]
+                if p != body_node and tree[p, TR_DEG] == 1:
+                    orow[nq, OR_ORDER] = p
+                    nq += 1
+                tree[c, TR_DEG] = -1
+            else:
+                tree[c, TR_DEG] = -2
+        if nq >= n_unknown:
+            return nq
+        # a cycle: eliminate its first node below one neighbour and lag the coupling of its other edges
+        c = -1
+        for n in range(nn):
+            if orow[n, OR_EFF] == n and n != body_node and tree[n, TR_DEG] >= 2:
+                c = n
+                break
+        if c < 0:
+            return nq
+        parent = -1
+        pseg = -1
+        for s in range(seg_i.shape[0]):
+            if seg_i[s, SI_ACTIVE] == 0:
+                continue
+            ea = orow[seg_i[s, SI_A], OR_EFF]
+            eb = orow[seg_i[s, SI_B], OR_EFF]
+            if ea == eb or ea < 0 or eb < 0 or (ea != c and eb != c):
+                continue
+            x = eb if ea == c else ea
+            if tree[x, TR_DEG] < 0:
+                continue
+            if parent < 0:
+                parent = x
+                pseg = s
+            else:
+                tree[x, TR_DEG] -= 1
+                tree[x, TR_NB] -= c
+                tree[x, TR_SEG] -= s
+                if x != body_node and tree[x, TR_DEG] == 1:
+                    orow[nq, OR_ORDER] = x
+                    nq += 1
+        tree[c, TR_DEG] = 1
+        tree[c, TR_NB] = parent
+        tree[c, TR_SEG] = pseg
+        orow[nq, OR_ORDER] = c
+        nq += 1
+
+
+@jit
+def _assemble(h, first, body_node, node_pos, node_vel, node_i, node_f, seg_i, seg_f, mat_f, env_f,
+              current_profile, node_force, node_mm, node_mass, node_contact, node_acc, seg_tension, orow):
+    """Diagonal blocks (node_mm) and right-hand sides (node_acc) for the current active set.
+
+    On the first call node_mm still holds the added mass from the load evaluation; later calls rebuild it.
+    """
+    nn = node_i.shape[0]
+    rho = env_f[EF_RHO]
+    depth = env_f[EF_DEPTH]
+    for n in range(nn):
+        if orow[n, OR_EFF] != n:
+            continue
+        if n == body_node:
+            for c in range(6):
+                node_mm[n, c] = 0.0
+            for c in range(3):
+                node_acc[n, c] = 0.0
+            continue
+        if not first:
+            for c in range(6):
+                node_mm[n, c] = 0.0
+        node_mm[n, 0] += node_mass[n]
+        node_mm[n, 1] += node_mass[n]
+        node_mm[n, 2] += node_mass[n]
+        for c in range(3):
+            node_acc[n, c] = h * node_force[n, c]
+    # point loads: added mass, point-mass drag, seabed contact and friction
+    kbot = env_f[EF_KBOT]
+    cbot = env_f[EF_CBOT]
+    mu = env_f[EF_MU]
+    fric_v = env_f[EF_FRIC_V]
+    for n in range(nn):
+        e = orow[n, OR_EFF]
+        if e < 0 or e == body_node:
+            continue
+        if not first:
+            ma = rho * node_f[n, NF_POINT_VOLUME] * node_f[n, NF_POINT_CA]
+            node_mm[e, 0] += ma
+            node_mm[e, 1] += ma
+            node_mm[e, 2] += ma
+        cda = node_f[n, NF_POINT_CDA]
+        if cda > 0.0:
+            ux, uy, uz = current_velocity(node_pos[n, 2], env_f, current_profile)
+            rx = ux - node_vel[n, 0]
+            ry = uy - node_vel[n, 1]
+            rz = uz - node_vel[n, 2]
+            vr = math.sqrt(rx * rx + ry * ry + rz * rz)
+            if vr > 0.0:
+                k = h * 0.5 * rho * cda
+                kv = k / vr
+                _add_sym(node_mm, e, k * vr + kv * rx * rx, k * vr + kv * ry * ry, k * vr + kv * rz * rz,
+                         kv * rx * ry, kv * rx * rz, kv * ry * rz)
+        area = node_contact[n]
+        penetration = -depth - node_pos[n, 2]
+        if penetration > 0.0 and area > 0.0:
+            vx = node_vel[n, 0]
+            vy = node_vel[n, 1]
+            vz = node_vel[n, 2]
+            fz = (kbot * penetration - cbot * vz) * area
+            if fz > 0.0:
+                node_mm[e, 2] += h * cbot * area + h * h * kbot * area
+                node_acc[e, 2] -= h * h * kbot * area * vz
+                vh = math.sqrt(vx * vx + vy * vy)
+                if vh < fric_v:
+                    cf = h * mu * fz / fric_v
+                    node_mm[e, 0] += cf
+                    node_mm[e, 1] += cf
+                else:
+                    cf = h * mu * fz / vh
+                    ex = vx / vh
+                    ey = vy / vh
+                    node_mm[e, 0] += cf * (1.0 - ex * ex)
+                    node_mm[e, 1] += cf * (1.0 - ey * ey)
+                    node_mm[e, 3] -= cf * ex * ey
+    # segments: added mass (rebuild), drag Jacobians, axial spring-damper of the active set
+    for s in range(seg_i.shape[0]):
+        if seg_i[s, SI_ACTIVE] == 0:
+            continue
+        a = seg_i[s, SI_A]
+        b = seg_i[s, SI_B]
+        ea = orow[a, OR_EFF]
+        eb = orow[b, OR_EFF]
+        if ea < 0 and eb < 0:
+            continue
+        m = seg_i[s, SI_MAT]
+        l0 = seg_f[s, SF_L0]
+        half = 0.5 * l0
+        d = mat_f[m, MF_D]
+        cn = 0.5 * rho * mat_f[m, MF_CDN] * d * half
+        ct = 0.5 * rho * mat_f[m, MF_CDT] * math.pi * d * half
+        dx = node_pos[b, 0] - node_pos[a, 0]
+        dy = node_pos[b, 1] - node_pos[a, 1]
+        dz = node_pos[b, 2] - node_pos[a, 2]
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if length > 0.0:
+            qx = dx / length
+            qy = dy / length
+            qz = dz / length
+        else:
+            qx = 0.0
+            qy = 0.0
+            qz = 1.0
+        volume = 0.25 * math.pi * d * d * half
+        for end in range(2):
+            n = a if end == 0 else b
+            e = ea if end == 0 else eb
+            if e < 0 or e == body_node:
+                continue
+            if not first:
+                add_slender_added_mass(node_mm, e, qx, qy, qz, rho * volume * mat_f[m, MF_CAN],
+                                       rho * volume * mat_f[m, MF_CAT])
+            if cn > 0.0 or ct > 0.0:
+                ux, uy, uz = current_velocity(node_pos[n, 2], env_f, current_profile)
+                rx = ux - node_vel[n, 0]
+                ry = uy - node_vel[n, 1]
+                rz = uz - node_vel[n, 2]
+                # linearise only where the drag is stiff on this step's scale (h * rate > DRAG_SKIP)
+                c = h * (cn + 2.0 * ct)
+                if c * c * (rx * rx + ry * ry + rz * rz) > (DRAG_SKIP * node_mass[e]) ** 2:
+                    _drag_jacobian(node_mm, e, h, rx, ry, rz, qx, qy, qz, cn, ct)
+        if ea == eb:
+            continue
+        tension = seg_tension[s]
+        rx = node_vel[b, 0] - node_vel[a, 0]
+        ry = node_vel[b, 1] - node_vel[a, 1]
+        rz = node_vel[b, 2] - node_vel[a, 2]
+        rq = rx * qx + ry * qy + rz * qz
+        if _is_active(orow, s) == 0:
+            if tension == 0.0:
+                continue
+            # leaves the active set during the step: no tension at its end
+            fx = -h * tension * qx
+            fy = -h * tension * qy
+            fz = -h * tension * qz
+        else:
+            ea_ = mat_f[m, MF_EA]
+            cq = mat_f[m, MF_ZETA] * math.sqrt(ea_ * mat_f[m, MF_MASS])
+            kq = ea_ / l0
+            kt = tension / length
+            # unclipped tension of the linear law minus the (clipped) tension already in the loads
+            t_lin = ea_ * (length - l0) / l0 + cq * rq
+            alpha = h * cq + h * h * (kq - kt)
+            beta = h * h * kt
+            w = h * (t_lin - tension) + h * h * (kq - kt) * rq
+            # h (t_lin - T) q + h^2 K_s (v_b - v_a), acting on node a (minus on b)
+            fx = w * qx + h * h * kt * rx
+            fy = w * qy + h * h * kt * ry
+            fz = w * qz + h * h * kt * rz
+            gxx = alpha * qx * qx + beta
+            gyy = alpha * qy * qy + beta
+            gzz = alpha * qz * qz + beta
+            gxy = alpha * qx * qy
+            gxz = alpha * qx * qz
+            gyz = alpha * qy * qz
+            if ea >= 0:
+                _add_sym(node_mm, ea, gxx, gyy, gzz, gxy, gxz, gyz)
+            if eb >= 0:
+                _add_sym(node_mm, eb, gxx, gyy, gzz, gxy, gxz, gyz)
+        if ea >= 0:
+            node_acc[ea, 0] += fx
+            node_acc[ea, 1] += fy
+            node_acc[ea, 2] += fz
+        if eb >= 0:
+            node_acc[eb, 0] -= fx
+            node_acc[eb, 1] -= fy
+            node_acc[eb, 2] -= fz
+
+
+@jit
+def _eliminate(h, nq, node_pos, seg_i, seg_f, mat_f, seg_tension, node_mm, node_acc, tree, orow):
+    """Forward elimination, leaves first: node_mm <- D^-1, node_acc <- y = D^-1 r; Schur terms into parents."""
+    for k in range(nq):
+        c = orow[k, OR_ORDER]
+        i11, i22, i33, i12, i13, i23 = _inv_sym3(node_mm[c, 0], node_mm[c, 1], node_mm[c, 2], node_mm[c, 3],
+                                                 node_mm[c, 4], node_mm[c, 5])
+        node_mm[c, 0] = i11
+        node_mm[c, 1] = i22
+        node_mm[c, 2] = i33
+        node_mm[c, 3] = i12
+        node_mm[c, 4] = i13
+        node_mm[c, 5] = i23
+        rx = node_acc[c, 0]
+        ry = node_acc[c, 1]
+        rz = node_acc[c, 2]
+        yx = i11 * rx + i12 * ry + i13 * rz
+        yy = i12 * rx + i22 * ry + i23 * rz
+        yz = i13 * rx + i23 * ry + i33 * rz
+        node_acc[c, 0] = yx
+        node_acc[c, 1] = yy
+        node_acc[c, 2] = yz
+        if tree[c, TR_DEG] != -1:
+            continue
+        p = tree[c, TR_NB]
+        alpha, beta, qx, qy, qz, kq, kt = _segment_gain(tree[c, TR_SEG], h, orow, node_pos, seg_i, seg_f, mat_f,
+                                                        seg_tension)
+        if alpha == 0.0 and beta == 0.0:
+            continue
+        # D_p -= G D_c^-1 G and r_p += G y, with G = alpha q q^T + beta I
+        wx = i11 * qx + i12 * qy + i13 * qz
+        wy = i12 * qx + i22 * qy + i23 * qz
+        wz = i13 * qx + i23 * qy + i33 * qz
+        a2 = alpha * alpha * (qx * wx + qy * wy + qz * wz)
+        ab = alpha * beta
+        b2 = beta * beta
+        _add_sym(node_mm, p, -(a2 * qx * qx + 2.0 * ab * qx * wx + b2 * i11),
+                 -(a2 * qy * qy + 2.0 * ab * qy * wy + b2 * i22),
+                 -(a2 * qz * qz + 2.0 * ab * qz * wz + b2 * i33),
+                 -(a2 * qx * qy + ab * (qx * wy + wx * qy) + b2 * i12),
+                 -(a2 * qx * qz + ab * (qx * wz + wx * qz) + b2 * i13),
+                 -(a2 * qy * qz + ab * (qy * wz + wy * qz) + b2 * i23))
+        gy = alpha * (qx * yx + qy * yy + qz * yz)
+        node_acc[p, 0] += gy * qx + beta * yx
+        node_acc[p, 1] += gy * qy + beta * yy
+        node_acc[p, 2] += gy * qz + beta * yz
+
+
+@jit
+def _back_substitute(h, nq, node_pos, seg_i, seg_f, mat_f, seg_tension, node_mm, node_acc, tree, orow):
+    """Root first: dv_c = y_c + D_c^-1 G dv_parent (node_acc <- dv)."""
+    for k in range(nq - 1, -1, -1):
+        c = orow[k, OR_ORDER]
+        if tree[c, TR_DEG] != -1:
+            continue
+        p = tree[c, TR_NB]
+        alpha, beta, qx, qy, qz, kq, kt = _segment_gain(tree[c, TR_SEG], h, orow, node_pos, seg_i, seg_f, mat_f,
+                                                        seg_tension)
+        if alpha == 0.0 and beta == 0.0:
+            continue
+        dpx = node_acc[p, 0]
+        dpy = node_acc[p, 1]
+        dpz = node_acc[p, 2]
+        qd = alpha * (qx * dpx + qy * dpy + qz * dpz)
+        gx = qd * qx + beta * dpx
+        gy = qd * qy + beta * dpy
+        gz = qd * qz + beta * dpz
+        node_acc[c, 0] += node_mm[c, 0] * gx + node_mm[c, 3] * gy + node_mm[c, 4] * gz
+        node_acc[c, 1] += node_mm[c, 3] * gx + node_mm[c, 1] * gy + node_mm[c, 5] * gz
+        node_acc[c, 2] += node_mm[c, 4] * gx + node_mm[c, 5] * gy + node_mm[c, 2] * gz
+
+
+@jit
+def _update_active_set(h, node_pos, node_vel, seg_i, seg_f, mat_f, node_acc, orow):
+    """Predict every segment's strain and tension at the end of the step from the solved dv; a segment is
+    active (taut) iff both are positive. Returns the number of segments that changed."""
+    changed = 0
+    nn = orow.shape[0]
+    for s in range(seg_i.shape[0]):
+        if seg_i[s, SI_ACTIVE] == 0 or (s >> 5) >= nn or _is_frozen(orow, s) == 1:
+            continue
+        a = seg_i[s, SI_A]
+        b = seg_i[s, SI_B]
+        ea = orow[a, OR_EFF]
+        eb = orow[b, OR_EFF]
+        if ea == eb:
+            continue
+        m = seg_i[s, SI_MAT]
+        l0 = seg_f[s, SF_L0]
+        dx = node_pos[b, 0] - node_pos[a, 0]
+        dy = node_pos[b, 1] - node_pos[a, 1]
+        dz = node_pos[b, 2] - node_pos[a, 2]
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if length > 0.0:
+            qx = dx / length
+            qy = dy / length
+            qz = dz / length
+        else:
+            qx = 0.0
+            qy = 0.0
+            qz = 1.0
+        rate0 = ((node_vel[b, 0] - node_vel[a, 0]) * qx + (node_vel[b, 1] - node_vel[a, 1]) * qy
+                 + (node_vel[b, 2] - node_vel[a, 2]) * qz) / l0
+        ddx = 0.0
+        ddy = 0.0
+        ddz = 0.0
+        if eb >= 0:
+            ddx += node_acc[eb, 0]
+            ddy += node_acc[eb, 1]
+            ddz += node_acc[eb, 2]
+        if ea >= 0:
+            ddx -= node_acc[ea, 0]
+            ddy -= node_acc[ea, 1]
+            ddz -= node_acc[ea, 2]
+        drate = (ddx * qx + ddy * qy + ddz * qz) / l0
+        rate1 = rate0 + drate  # strain rate at the end of the step
+        strain1 = (length - l0) / l0 + h * rate1
+        ea_ = mat_f[m, MF_EA]
+        t1 = ea_ * strain1 + mat_f[m, MF_ZETA] * l0 * math.sqrt(ea_ * mat_f[m, MF_MASS]) * rate1
+        if _is_active(orow, s) == 1:
+            flip = strain1 < -SET_TOLERANCE or t1 < -SET_TOLERANCE * ea_
+        else:
+            flip = strain1 > SET_TOLERANCE and t1 > SET_TOLERANCE * ea_
+        if flip:
+            _flip(orow, s)
+            changed += 1
+    return changed
+
+
+@jit
+def _couple_body(h, p, body_state, node_f, body_f, body_acc, node_mm, node_acc):
+    """Solve the line impulse on the anchor at node p implicitly; node_acc[p] <- dv_p.
+
+    node_mm[p] holds S (the eliminated lines' impedance at p), node_acc[p] holds rho; ``body_acc`` is the
+    explicit acceleration (not changed). Returns the correction of the anchor's acceleration (6 values).
+    """
+    ex = body_state[BS_AXIS]
+    ey = body_state[BS_AXIS + 1]
+    ez = body_state[BS_AXIS + 2]
+    s = node_f[p, NF_BODY_S]
+    m_ax = body_f[BF_MASS_AXIAL]
+    m11 = body_f[BF_M11]
+    m12 = body_f[BF_M12]
+    m22 = body_f[BF_M22]
+    det = m11 * m22 - m12 * m12
+    w_ax = 1.0 / m_ax
+    w_n = (m22 - 2.0 * s * m12 + s * s * m11) / det
+    # explicit velocity increment of the body point: h (a_G + s alpha x e)
+    ax = body_acc[3]
+    ay = body_acc[4]
+    az = body_acc[5]
+    u0x = h * (body_acc[0] + s * (ay * ez - az * ey))
+    u0y = h * (body_acc[1] + s * (az * ex - ax * ez))
+    u0z = h * (body_acc[2] + s * (ax * ey - ay * ex))
+    s11 = node_mm[p, 0]
+    s22 = node_mm[p, 1]
+    s33 = node_mm[p, 2]
+    s12 = node_mm[p, 3]
+    s13 = node_mm[p, 4]
+    s23 = node_mm[p, 5]
+    # W = w_n I + (w_ax - w_n) e e^T
+    dw = w_ax - w_n
+    w11 = w_n + dw * ex * ex
+    w22 = w_n + dw * ey * ey
+    w33 = w_n + dw * ez * ez
+    w12 = dw * ex * ey
+    w13 = dw * ex * ez
+    w23 = dw * ey * ez
+    # (I + S W) f = rho - S u0
+    a11 = 1.0 + s11 * w11 + s12 * w12 + s13 * w13
+    a12 = s11 * w12 + s12 * w22 + s13 * w23
+    a13 = s11 * w13 + s12 * w23 + s13 * w33
+    a21 = s12 * w11 + s22 * w12 + s23 * w13
+    a22 = 1.0 + s12 * w12 + s22 * w22 + s23 * w23
+    a23 = s12 * w13 + s22 * w23 + s23 * w33
+    a31 = s13 * w11 + s23 * w12 + s33 * w13
+    a32 = s13 * w12 + s23 * w22 + s33 * w23
+    a33 = 1.0 + s13 * w13 + s23 * w23 + s33 * w33
+    bx = node_acc[p, 0] - (s11 * u0x + s12 * u0y + s13 * u0z)
+    by = node_acc[p, 1] - (s12 * u0x + s22 * u0y + s23 * u0z)
+    bz = node_acc[p, 2] - (s13 * u0x + s23 * u0y + s33 * u0z)
+    c11 = a22 * a33 - a23 * a32
+    c12 = a13 * a32 - a12 * a33
+    c13 = a12 * a23 - a13 * a22
+    c21 = a23 * a31 - a21 * a33
+    c22 = a11 * a33 - a13 * a31
+    c23 = a13 * a21 - a11 * a23
+    c31 = a21 * a32 - a22 * a31
+    c32 = a12 * a31 - a11 * a32
+    c33 = a11 * a22 - a12 * a21
+    inv = 1.0 / (a11 * c11 + a12 * c21 + a13 * c31)
+    fx = (c11 * bx + c12 * by + c13 * bz) * inv
+    fy = (c21 * bx + c22 * by + c23 * bz) * inv
+    fz = (c31 * bx + c32 * by + c33 * bz) * inv
+    # dv_p = u0 + W f
+    node_acc[p, 0] = u0x + w11 * fx + w12 * fy + w13 * fz
+    node_acc[p, 1] = u0y + w12 * fx + w22 * fy + w23 * fz
+    node_acc[p, 2] = u0z + w13 * fx + w23 * fy + w33 * fz
+    # M_b^-1 J^T f / h: the line impulse f applied at s (axial, normal translation, alpha = e x b)
+    fa = fx * ex + fy * ey + fz * ez
+    pfx = fx - fa * ex
+    pfy = fy - fa * ey
+    pfz = fz - fa * ez
+    ca = fa / (m_ax * h)
+    cp = (m22 - s * m12) / (det * h)
+    cb = (m11 * s - m12) / (det * h)
+    return (ca * ex + cp * pfx, ca * ey + cp * pfy, ca * ez + cp * pfz, cb * (ey * pfz - ez * pfy),
+            cb * (ez * pfx - ex * pfz), cb * (ex * pfy - ey * pfx))
+
+
+@jit
+def implicit_euler_update(h, body_active, node_pos, node_vel, body_state, node_i, node_f, seg_i, seg_f, mat_f,
+                          body_f, env_f, current_profile, node_force, node_mm, node_mass, node_contact, node_acc,
+                          seg_tension, body_acc, pos0, vel0, body0):
+    """Advance free nodes and the anchor by one linearly implicit step (loads already evaluated at the start).
+
+    Expects the workspace as left by ``compute_accelerations`` at (x, v) and ``body0`` = anchor state at the
+    start. Writes positions/velocities of free nodes, the anchor state and ``body_acc`` (corrected).
+
+    Returns
+    -------
+    vmax2 : float
+        Largest squared speed of a free node (NaN if any is non-finite).
+    worst_node : int
+    body_v2 : float
+        Squared speed of the anchor's COG.
+    """
+    nn = node_i.shape[0]
+    tree = pos0.view(np.int64)
+    orow = vel0.view(np.int64)
+    body_node = -1
+    if body_active:
+        for n in range(nn):
+            if node_i[n, NI_KIND] == NODE_BODY:
+                body_node = n
+                break
+    _setup(body_node, node_i, seg_i, seg_tension, tree, orow)
+    nq = _order(body_node, node_i, seg_i, tree, orow)
+    c0 = c1 = c2 = c3 = c4 = c5 = 0.0
+    for it in range(MAX_ACTIVE_SET_SOLVES):
+        _assemble(h, it == 0, body_node, node_pos, node_vel, node_i, node_f, seg_i, seg_f, mat_f, env_f,
+                  current_profile, node_force, node_mm, node_mass, node_contact, node_acc, seg_tension, orow)
+        _eliminate(h, nq, node_pos, seg_i, seg_f, mat_f, seg_tension, node_mm, node_acc, tree, orow)
+        if body_node >= 0:
+            c0, c1, c2, c3, c4, c5 = _couple_body(h, body_node, body_state, node_f, body_f, body_acc, node_mm,
+                                                  node_acc)
+        _back_substitute(h, nq, node_pos, seg_i, seg_f, mat_f, seg_tension, node_mm, node_acc, tree, orow)
+        if _update_active_set(h, node_pos, node_vel, seg_i, seg_f, mat_f, node_acc, orow) == 0:
+            break
+    body_v2 = 0.0
+    if body_active:
+        body_acc[0] += c0
+        body_acc[1] += c1
+        body_acc[2] += c2
+        body_acc[3] += c3
+        body_acc[4] += c4
+        body_acc[5] += c5
+        wx = body0[BS_OMEGA] + h * body_acc[3]
+        wy = body0[BS_OMEGA + 1] + h * body_acc[4]
+        wz = body0[BS_OMEGA + 2] + h * body_acc[5]
+        for c in range(3):
+            body_state[BS_VEL + c] = body0[BS_VEL + c] + h * body_acc[c]
+            body_state[BS_OMEGA + c] = body0[BS_OMEGA + c] + h * body_acc[3 + c]
+            body_state[BS_POS + c] = body0[BS_POS + c] + h * body_state[BS_VEL + c]
+            body_v2 += body_state[BS_VEL + c] ** 2
+        rotate_axis(body_state, body0[BS_AXIS:BS_AXIS + 3], wx, wy, wz, h)
+    # v += dv, x += h v; node_acc <- dv / h (the step's effective acceleration)
+    vmax2 = 0.0
+    worst = -1
+    inv_h = 1.0 / h
+    for n in range(nn):
+        if node_i[n, NI_KIND] != NODE_FREE:
+            continue
+        v2 = 0.0
+        for c in range(3):
+            dv = node_acc[n, c]
+            v = node_vel[n, c] + dv
+            node_vel[n, c] = v
+            node_pos[n, c] += h * v
+            node_acc[n, c] = dv * inv_h
+            v2 += v * v
+        if not (v2 <= vmax2):
+            vmax2 = v2
+            worst = n
+            if v2 != v2:
+                return v2, n, body_v2
+    return vmax2, worst, body_v2
