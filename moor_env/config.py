@@ -26,6 +26,7 @@ from moor_env.errors import ConfigError
 CONFIG_DIR = Path(__file__).resolve().parent.parent / "configs"
 SCENE_DIR = CONFIG_DIR / "scenes"
 LIBRARY_PATH = CONFIG_DIR / "library.yaml"
+FIDELITY_PATH = CONFIG_DIR / "fidelity.yaml"
 
 
 class _Strict(BaseModel):
@@ -234,6 +235,8 @@ class SceneConfig(_Strict):
     name: str
     description: str = ""
     kind: Literal["dart_installation", "catenary_line"] = "dart_installation"
+    fidelity: Literal["fast", "default", "accurate", "custom"] = Field(
+        "default", description="discretization preset from configs/fidelity.yaml; explicit discretization keys win")
     environment: EnvironmentConfig
     materials: dict[str, MaterialConfig]
     anchor: AnchorConfig | None = None
@@ -270,6 +273,7 @@ SET_SHORTCUTS: dict[str, str] = {
     "anchor_mass_scale": "anchor.mass_scale",
     "dt_s": "discretization.dt_s",
     "integrator": "discretization.integrator",
+    "fidelity": "fidelity",
 }
 
 
@@ -432,7 +436,30 @@ def load_scene(scene: str | Path, overrides: dict[str, Any] | None = None) -> Sc
     data = scene_dict(scene)
     for key, value in (overrides or {}).items():
         _apply_override(data, key, value)
-    return scene_from_dict(data)
+    return scene_from_dict(apply_fidelity(data))
+
+
+def fidelity_presets() -> dict[str, dict[str, Any]]:
+    """The discretization presets of ``configs/fidelity.yaml`` by name."""
+    with open(FIDELITY_PATH, encoding="utf-8") as fh:
+        return yaml.safe_load(fh)
+
+
+def apply_fidelity(data: dict[str, Any]) -> dict[str, Any]:
+    """Fill the ``discretization`` keys a scene does not set from its ``fidelity`` preset (``default`` if
+    none); ``custom`` uses only what the scene sets."""
+    name = data.get("fidelity", "default")
+    if name == "custom":
+        return data
+    presets = fidelity_presets()
+    if name not in presets:
+        raise ConfigError("fidelity", name, "one of " + ", ".join([*presets, "custom"]))
+    disc = data.setdefault("discretization", {})
+    if not isinstance(disc, dict):
+        return data
+    for key, value in presets[name].items():
+        disc.setdefault(key, value)
+    return data
 
 
 def check_scene_consistency(scene: SceneConfig) -> None:
