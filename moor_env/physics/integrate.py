@@ -8,6 +8,9 @@ to a blow-up) with no Python work per step. Integrators:
   conserves energy without drift when nothing dissipates.
 - ``rk2`` (explicit midpoint, MoorDyn's default, two evaluations per step): stable for omega_n dt <= 2 only
   with damping; undamped it amplifies every mode slightly at each step.
+- ``implicit_euler`` (``physics/implicit.py``): linearly implicit backward Euler for the line nodes (axial
+  spring-dampers, drag, seabed linearised; O(N) block elimination over the tree of lines), anchor explicit. No
+  axial step limit: its step is capped for accuracy (segment rotation per step), typically 30x the explicit one.
 
 A blow-up is caught every step: any node faster than the speed limit, any segment strained beyond the strain
 limit, or a non-finite value (NaN fails every comparison) ends the call with a status and the failing
