@@ -27,3 +27,11 @@ __all__ = [
     "simulate_drop",
     "solve_statics",
 ]
+
+# Gymnasium environments (moor_env/AnchorRelease-v0, moor_env/AnchorPlan-v0): registered on import.
+try:
+    from moor_env.envs.registration import register_envs as _register_envs
+except ImportError:  # pragma: no cover - gymnasium missing: the physics API still works
+    pass
+else:
+    _register_envs()

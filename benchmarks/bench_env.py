@@ -1,0 +1,194 @@
+"""Benchmark: AnchorRelease-v0 steps and episodes per second, single env, async vector env and batched env.
+
+Run from the repository root: ``python benchmarks/bench_env.py [--episodes 3] [--quick]``. Every env runs the
+default config (``configs/envs/anchor-release.yaml``: 2/2/20/30 m elements, 1 s control steps) on the default
+scene's geometry (gjoa-500: depth 500 m, spacing 0.1 h, line 1.08 h, no current) with the sea state drawn from
+the config (Hs 0-3 m, so most resets simulate the 20 s wave warm-up). The policy holds the vessels for 59 steps
+and releases on the 60th, so one episode is 59 s of pre-release control plus the fall to touchdown (the
+issue's "60 s pre-release plus the fall"). The equilibrium is solved before timing starts (it is cached).
+
+Measured for each env: wall time, CPU time of every process involved (``/proc`` for the async workers),
+transitions (env steps that are not autoresets) and episodes per second, per second per core used.
+Writes ``benchmarks/results/bench_env.json`` and prints a markdown table for the README. The machine is shared;
+the 1-minute load average before and after is recorded with the results.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+import gymnasium as gym  # noqa: E402
+
+import moor_env  # noqa: E402, F401 - registers the envs
+from moor_env.envs import AnchorReleaseVectorEnv  # noqa: E402
+
+RESULTS = ROOT / "benchmarks" / "results" / "bench_env.json"
+ENV_ID = "moor_env/AnchorRelease-v0"
+SCENE = {"water_depth_m": 500.0, "vessel_spacing_over_depth": 0.1, "mooring_line_length_over_depth": 1.08,
+         "current_scale": 0.0, "anchor_mass_scale": 1.0}
+OVERRIDES = {f"scenario.{k}": v for k, v in SCENE.items()}  # autoresets draw from the config: fix it there
+RELEASE_STEP = 59  # 0-based: 59 holding steps, release on the 60th
+
+
+def machine() -> str:
+    """Processor name and logical core count of this machine."""
+    name = ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                name = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{name or platform.machine()}, {os.cpu_count()} logical cores, {platform.system()}"
+
+
+def _proc_cpu_s(pid: int) -> float:
+    """utime + stime of a live process [s] (Linux /proc)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _actions(k: np.ndarray) -> np.ndarray:
+    act = np.zeros((k.size, 3), np.float32)
+    act[:, 2] = np.where(k >= RELEASE_STEP, 1.0, -1.0)
+    return act
+
+
+def bench_single(episodes: int, overrides: dict) -> dict:
+    env = gym.make(ENV_ID, overrides=overrides)
+    env.reset(seed=0)  # solves (or loads) the equilibrium, compiles nothing new
+    steps = 0
+    resets_wall = 0.0
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    for ep in range(episodes):
+        t = time.perf_counter()
+        env.reset(seed=100 + ep)
+        resets_wall += time.perf_counter() - t
+        for k in range(RELEASE_STEP + 1):
+            _, _, terminated, truncated, info = env.step(_actions(np.array([k]))[0])
+            steps += 1
+            if terminated or truncated:
+                break
+        assert info["sim_status"] == "touchdown", info["sim_status"]
+    wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
+    env.close()
+    return {"env": "single", "num_envs": 1, "cores": 1, "episodes": episodes, "transitions": steps,
+            "wall_s": wall, "cpu_s": cpu, "reset_wall_s_mean": resets_wall / episodes}
+
+
+def _run_vector(env, n: int, episodes_per_env: int, cpu_fn) -> dict:
+    env.reset(seed=0)
+    k = np.zeros(n, dtype=np.int64)
+    autoreset = np.zeros(n, dtype=bool)
+    done_episodes = 0
+    transitions = 0
+    wall0, cpu0 = time.perf_counter(), cpu_fn()
+    while done_episodes < episodes_per_env * n:
+        _, _, terminated, truncated, info = env.step(_actions(k))
+        transitions += int(np.sum(~autoreset))
+        ended = (terminated | truncated) & ~autoreset
+        done_episodes += int(np.sum(ended))
+        k = np.where(autoreset, 0, k + 1)
+        autoreset = terminated | truncated
+    wall, cpu = time.perf_counter() - wall0, cpu_fn() - cpu0
+    return {"episodes": done_episodes, "transitions": transitions, "wall_s": wall, "cpu_s": cpu}
+
+
+def bench_async(n: int, episodes_per_env: int, overrides: dict) -> dict:
+    env = gym.make_vec(ENV_ID, num_envs=n, vectorization_mode="async", overrides=overrides)
+    pids = [p.pid for p in env.processes]
+
+    def cpu() -> float:
+        return time.process_time() + sum(_proc_cpu_s(p) for p in pids)
+
+    out = _run_vector(env, n, episodes_per_env, cpu)
+    env.close()
+    return {"env": "async", "num_envs": n, "cores": min(n, os.cpu_count() or 1), **out}
+
+
+def bench_batched(n: int, episodes_per_env: int, threads: int, overrides: dict) -> dict:
+    env = AnchorReleaseVectorEnv(num_envs=n, overrides=overrides, num_threads=threads)
+    out = _run_vector(env, n, episodes_per_env, time.process_time)
+    env.close()
+    return {"env": "batched", "num_envs": n, "cores": min(threads, os.cpu_count() or 1), "threads": threads, **out}
+
+
+def _rates(row: dict) -> dict:
+    row["transitions_per_s"] = row["transitions"] / row["wall_s"]
+    row["episodes_per_s"] = row["episodes"] / row["wall_s"]
+    row["episodes_per_s_per_core"] = row["episodes_per_s"] / row["cores"]
+    row["cpu_s_per_episode"] = row["cpu_s"] / row["episodes"]
+    row["wall_s_per_episode_per_core"] = row["wall_s"] * row["cores"] / row["episodes"]
+    return row
+
+
+def main(argv: list[str] | None = None) -> dict:
+    """Run every configuration, write the JSON and print the table."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--episodes", type=int, default=3, help="episodes per env slot")
+    parser.add_argument("--quick", action="store_true", help="1 episode per slot (a smoke run)")
+    parser.add_argument("--implicit", action="store_true",
+                        help="also run with discretization.integrator=implicit_euler (physics work in progress)")
+    args = parser.parse_args(argv)
+    episodes = 1 if args.quick else args.episodes
+    load_before = os.getloadavg()[0]
+    variants = [("explicit (default fidelity)", OVERRIDES)]
+    if args.implicit:
+        variants.append(("implicit_euler", {**OVERRIDES, "fidelity.discretization.integrator": "implicit_euler"}))
+    rows = []
+    for label, overrides in variants:
+        runs = [lambda o=overrides: bench_single(episodes, o),
+                lambda o=overrides: bench_async(2, episodes, o),
+                lambda o=overrides: bench_batched(2, episodes, 2, o),
+                lambda o=overrides: bench_batched(8, episodes, 2, o),
+                lambda o=overrides: bench_batched(8, episodes, 1, o)]
+        for run in runs:
+            rows.append({"integrator": label, **_rates(run())})
+            print(rows[-1], flush=True)
+    ratios = {}
+    for label, _ in variants:
+        async_rate = next(r for r in rows if r["env"] == "async" and r["integrator"] == label)["transitions_per_s"]
+        best = max(r["transitions_per_s"] for r in rows if r["env"] == "batched" and r["integrator"] == label)
+        ratios[label] = best / async_rate
+    result = {
+        "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "machine": machine(),
+        "load_average_1min": {"before": load_before, "after": os.getloadavg()[0]},
+        "python": platform.python_version(),
+        "config": "anchor-release (default)",
+        "scenario": SCENE,
+        "episode": f"{RELEASE_STEP} control steps of 1 s, release, fall to touchdown",
+        "rows": rows,
+        "batched_over_async_transitions": ratios,
+        "targets": {"episode_cpu_s": 0.050, "batched_over_async": 3.0},
+    }
+    RESULTS.parent.mkdir(parents=True, exist_ok=True)
+    RESULTS.write_text(json.dumps(result, indent=2))
+    print(f"\nwritten {RESULTS.relative_to(ROOT)}; {result['machine']}; load {load_before:.2f} -> "
+          f"{result['load_average_1min']['after']:.2f}\n")
+    print("| integrator | env | envs | threads/procs | transitions/s | episodes/s | episodes/s/core | CPU s/episode |")
+    print("|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        print(f"| {r['integrator']} | {r['env']} | {r['num_envs']} | {r.get('threads', r['cores'])} | "
+              f"{r['transitions_per_s']:.1f} | {r['episodes_per_s']:.3f} | {r['episodes_per_s_per_core']:.3f} | "
+              f"{r['cpu_s_per_episode']:.3f} |")
+    for label, ratio in ratios.items():
+        print(f"batched / async transitions per second, {label}: {ratio:.2f}")
+    return result
+
+
+if __name__ == "__main__":
+    main()

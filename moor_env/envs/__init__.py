@@ -1,0 +1,27 @@
+"""Gymnasium environments of the dart-anchor installation (issue 3).
+
+* ``moor_env/AnchorRelease-v0`` (:class:`AnchorReleaseEnv`): sequential control of vessel spacing, mooring-line
+  payout and the release moment; batched vector env :class:`AnchorReleaseVectorEnv`.
+* ``moor_env/AnchorPlan-v0`` (:class:`AnchorPlanEnv`): one step sets spacing, payout and release delay.
+
+Both are registered when ``moor_env`` is imported. Settings: ``configs/envs/*.yaml`` (:func:`load_env_config`).
+"""
+
+from moor_env.envs.anchor_plan import AnchorPlanEnv
+from moor_env.envs.anchor_release import AnchorReleaseEnv
+from moor_env.envs.config import SCENARIO_FIELDS, EnvConfig, load_env_config
+from moor_env.envs.core import ACTION_NAMES, OBS_NAMES, OBS_SPEC, REWARD_TERMS
+from moor_env.envs.vector import AnchorReleaseVectorEnv
+
+__all__ = [
+    "ACTION_NAMES",
+    "OBS_NAMES",
+    "OBS_SPEC",
+    "REWARD_TERMS",
+    "SCENARIO_FIELDS",
+    "AnchorPlanEnv",
+    "AnchorReleaseEnv",
+    "AnchorReleaseVectorEnv",
+    "EnvConfig",
+    "load_env_config",
+]

@@ -1,0 +1,653 @@
+"""RL logic shared by every env class: scenario draw, episode start, controls, observation, reward.
+
+The physics stays in :mod:`moor_env.physics` / :class:`moor_env.Simulator`; this module only drives a
+simulator through its public methods. One :class:`InstallationCore` is one episode slot. An env step is split
+into ``begin_step`` (apply the action, return an :class:`Advance` request: integrate to ``t_end``),
+the integration itself (:func:`run_advance` for one simulator, :mod:`moor_env.envs.batch` for many in one numba
+call) and ``finish_step`` (observation, reward, episode end). The single env and the batched vector env
+therefore share every line of RL logic, and row i of the batched env equals the single env bit for bit.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from collections import OrderedDict
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from moor_env.compile import VESSEL_INSTALLATION, VESSEL_SECOND, Model, compile_scene
+from moor_env.config import SET_SHORTCUTS, scene_dict, scene_from_dict
+from moor_env.envs.config import SCENARIO_FIELDS, SCENARIO_RANGES, SEED_FIELD, SEED_HIGH, Choice, EnvConfig, Uniform
+from moor_env.envs.equilibria import EquilibriumCache, scene_key, statics_scene_dict
+from moor_env.errors import ConfigError, SimulationDiverged, StaticsNotConverged
+from moor_env.physics import layout as L
+from moor_env.physics.environment import current_velocity
+from moor_env.physics.vessels import track_state
+from moor_env.simulation import Simulator
+
+# --- observation: (name, unit, offset, scale, meaning); normalised value = (raw - offset) / scale ----------------
+OBS_SPEC: tuple[tuple[str, str, float, float, str], ...] = (
+    ("time_fraction", "-", 0.5, 0.5, "time since the first observation / control.max_pre_release_s"),
+    ("released", "-", 0.5, 0.5, "1 after the release, else 0"),
+    ("vessel_spacing_m", "m", 125.0, 100.0, "horizontal distance between the two vessels' mean positions"),
+    ("spacing_rate_m_s", "m/s", 0.0, 0.5, "second vessel's speed away from the installation vessel"),
+    ("line_length_over_depth", "-", 1.06, 0.1, "mooring line length (vertical chain + loop chain + fibre) / depth"),
+    ("payout_rate_m_s", "m/s", 0.0, 0.3, "mooring-line winch rate, + pays out"),
+    ("release_node_dx_m", "m", 0.0, 5.0, "release node x minus its x at the start of the episode"),
+    ("release_node_dy_m", "m", 0.0, 5.0, "release node y minus its y at the start"),
+    ("release_node_dz_m", "m", 0.0, 5.0, "release node z minus its z at the start"),
+    ("release_node_vx_m_s", "m/s", 0.0, 1.0, "release node velocity x"),
+    ("release_node_vy_m_s", "m/s", 0.0, 1.0, "release node velocity y"),
+    ("release_node_vz_m_s", "m/s", 0.0, 1.0, "release node velocity z (up +)"),
+    ("tilt_deg", "deg", 0.0, 5.0, "anchor axis angle from vertical"),
+    ("tilt_rate_deg_s", "deg/s", 0.0, 5.0, "angular speed of the anchor axis"),
+    ("wire_tension_mn", "MN", 1.25, 1.25, "installation wire load on its vessel (0 after release)"),
+    ("mooring_line_tension_mn", "MN", 0.5, 0.5, "mooring line load on the second vessel"),
+    ("vessel_heave_m", "m", 0.0, 2.0, "installation vessel heave"),
+    ("vessel_heave_rate_m_s", "m/s", 0.0, 1.0, "installation vessel heave velocity"),
+    ("current_surface_x_m_s", "m/s", 0.0, 1.0, "surface current, x (towards the second vessel)"),
+    ("current_surface_y_m_s", "m/s", 0.0, 1.0, "surface current, y"),
+    ("water_depth_m", "m", 500.0, 200.0, "water depth"),
+    ("tip_height_m", "m", 68.5, 20.0, "anchor tip height above the seabed"),
+    ("loop_bottom_height_m", "m", 80.0, 60.0, "lowest mooring-line node above the seabed"),
+    ("fibre_clearance_m", "m", 100.0, 100.0, "lowest fibre-rope node above the seabed"),
+    ("sea_state_hs_m", "m", 1.5, 1.5, "significant wave height (forecast)"),
+    ("sea_state_tp_s", "s", 10.0, 3.0, "peak period (forecast)"),
+    ("vertical_chain_length_m", "m", 50.0, 25.0, "chain hanging between the anchor and the release node"),
+)
+OBS_NAMES: tuple[str, ...] = tuple(row[0] for row in OBS_SPEC)
+OBS_UNITS: tuple[str, ...] = tuple(row[1] for row in OBS_SPEC)
+OBS_OFFSET = np.array([row[2] for row in OBS_SPEC])
+OBS_SCALE = np.array([row[3] for row in OBS_SPEC])
+OBS_CLIP = 5.0
+
+# --- action ----------------------------------------------------------------------------------------------------
+ACTION_NAMES: tuple[str, ...] = ("spacing_rate", "payout_rate", "release")
+
+# --- reward terms (every key in info["reward_terms"] at every step; their sum is the reward) ------------------
+REWARD_TERMS: tuple[str, ...] = ("speed", "tilt", "offset", "tension", "release_unit", "fibre_seabed",
+                                 "chain_pile", "time", "truncation", "failure", "no_touchdown")
+
+PHASE_WARMUP = "warmup"
+PHASE_CONTROL = "control"
+PHASE_FALL = "fall"
+PHASE_HOLD = "hold"
+
+
+@dataclass
+class Advance:
+    """Integrate the core's simulator to ``t_end_s`` (to touchdown when ``detect_touchdown``)."""
+
+    t_end_s: float
+    detect_touchdown: bool
+    phase: str
+
+
+def apply_scene_overrides(base: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
+    """Copy of a scene mapping with ``--set`` style overrides (shortcuts of :data:`SET_SHORTCUTS`) applied."""
+    data = json.loads(json.dumps(base))
+    chain = data.get("installation", {}).get("chain_material", "chain_142")
+    for key, value in overrides.items():
+        path = SET_SHORTCUTS.get(key, key).replace("{chain}", str(chain)).split(".")
+        node = data
+        for part in path[:-1]:
+            node = node.setdefault(part, {})
+        node[path[-1]] = value
+    return data
+
+
+class SceneFactory:
+    """Scenario -> scene mapping -> validated :class:`SceneConfig` (the base scene is read from YAML once).
+
+    Raises
+    ------
+    ConfigError
+        At construction, if the scene, ``fidelity`` or ``scene_overrides`` are invalid (checked with the
+        config's representative scenario: the first value of every scenario distribution).
+    """
+
+    def __init__(self, cfg: EnvConfig) -> None:
+        self.cfg = cfg
+        self.models: OrderedDict[str, Model] = OrderedDict()  # compiled statics scenes by equilibrium key
+        raw = scene_dict(cfg.scene)
+        if raw.get("kind", "dart_installation") != "dart_installation" or "installation" not in raw:
+            raise ConfigError("scene", cfg.scene, "a dart_installation scene")
+        self.base = apply_scene_overrides(raw, {**cfg.fidelity, **cfg.scene_overrides})
+        scene = self.scene(representative_scenario(cfg))
+        self.chain_material = scene.installation.chain_material
+        self.nominal_cd_t = float(self.base["materials"][self.chain_material]["cd_tangential"])
+        comp = scene.installation.components
+        if not (comp.wire and comp.vertical_chain and comp.mooring_line):
+            raise ConfigError("scene", cfg.scene, "a scene with wire, vertical chain and mooring line")
+
+    @staticmethod
+    def scene_overrides(scenario: dict[str, Any]) -> dict[str, Any]:
+        """Scene ``--set`` overrides of a scenario."""
+        depth = float(scenario["water_depth_m"])
+        return {
+            "water_depth_m": depth,
+            "vessel_spacing_m": float(scenario["vessel_spacing_over_depth"]) * depth,
+            "mooring_line_length_m": float(scenario["mooring_line_length_over_depth"]) * depth,
+            "vertical_chain_length_m": float(scenario["vertical_chain_length_m"]),
+            "drop_height_m": float(scenario["drop_height_m"]),
+            "current_scale": float(scenario["current_scale"]),
+            "current_direction_deg": float(scenario["current_direction_deg"]),
+            "sea_state_hs_m": float(scenario["sea_state_hs_m"]),
+            "sea_state_tp_s": float(scenario["sea_state_tp_s"]),
+            "sea_state_seed": int(scenario["sea_state_seed"]),
+            "chain_cd_tangential": float(scenario["chain_cd_tangential"]),
+            "anchor_mass_scale": float(scenario["anchor_mass_scale"]),
+        }
+
+    def scene_data(self, scenario: dict[str, Any]) -> dict[str, Any]:
+        """Scene mapping of a scenario."""
+        return apply_scene_overrides(self.base, self.scene_overrides(scenario))
+
+    def statics_data(self, scenario: dict[str, Any]) -> dict[str, Any]:
+        """Scene mapping whose equilibrium starts the episode (see :mod:`moor_env.envs.equilibria`)."""
+        data = statics_scene_dict(self.scene_data(scenario), self.chain_material, self.nominal_cd_t)
+        if data["environment"]["current"]["scale"] == 0.0:
+            data["environment"]["current"]["direction_deg"] = 0.0
+        return data
+
+    def scene(self, scenario: dict[str, Any]):
+        """Validated scene of a scenario.
+
+        Raises
+        ------
+        ConfigError
+            Naming the scene key the scenario makes invalid.
+        """
+        try:
+            return scene_from_dict(self.scene_data(scenario))
+        except ConfigError as exc:
+            raise ConfigError(exc.key, exc.value, exc.allowed,
+                              (exc.reason + "; " if exc.reason else "") + f"scene of scenario {scenario}") from None
+
+
+def derive_model(base: Model, scene) -> Model:
+    """``base`` (compiled from the statics scene) turned into the model of ``scene``, which differs from it only in
+    the sea state and the chain's tangential drag coefficient (:mod:`moor_env.envs.equilibria`).
+
+    Neither enters the compiled arrays except the material table's ``MF_CDT`` column (the sea state is read from
+    ``model.scene`` by the Simulator; the time-step bound uses normal drag only). The test suite checks that the
+    result equals ``compile_scene(scene)`` array for array.
+    """
+    mat_f = base.mat_f.copy()
+    for i, name in enumerate(base.material_names):
+        mat_f[i, L.MF_CDT] = scene.materials[name].cd_tangential
+    return dataclasses.replace(base, scene=scene, mat_f=mat_f)
+
+
+def representative_scenario(cfg: EnvConfig) -> dict[str, Any]:
+    """First value of every scenario distribution (constant, first choice, lower uniform bound); seed 0."""
+    out: dict[str, Any] = {}
+    for name in SCENARIO_FIELDS:
+        dist = getattr(cfg.scenario, name)
+        if name == SEED_FIELD:
+            out[name] = 0 if dist == "draw" else int(dist)
+        elif isinstance(dist, Choice):
+            out[name] = float(dist.choice[0])
+        elif isinstance(dist, Uniform):
+            out[name] = float(dist.uniform[0])
+        else:
+            out[name] = float(dist)
+    return out
+
+
+def _draw(dist, rng: np.random.Generator) -> float:
+    if isinstance(dist, Choice):
+        return float(dist.choice[int(rng.integers(len(dist.choice)))])
+    if isinstance(dist, Uniform):
+        lo, hi = dist.uniform
+        return float(rng.uniform(lo, hi))
+    return float(dist)
+
+
+def draw_scenario(cfg: EnvConfig, rng: np.random.Generator, options: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Draw a scenario from the config's distribution; ``options`` fixes fields.
+
+    Every field is drawn (in the fixed order of :data:`SCENARIO_FIELDS`) even when ``options`` fixes it, so that
+    fixing one field leaves the draws of the others unchanged for a given seed.
+
+    Raises
+    ------
+    ConfigError
+        For an unknown option key or a value outside the field's range.
+    """
+    scenario: dict[str, Any] = {}
+    for name in SCENARIO_FIELDS:
+        if name == SEED_FIELD:
+            dist = cfg.scenario.sea_state_seed
+            scenario[name] = int(rng.integers(0, SEED_HIGH + 1)) if dist == "draw" else int(dist)
+        else:
+            scenario[name] = _draw(getattr(cfg.scenario, name), rng)
+    for key, value in (options or {}).items():
+        if key not in SCENARIO_FIELDS:
+            raise ConfigError(f"options.{key}", value, "a scenario field: " + ", ".join(SCENARIO_FIELDS))
+        if key == SEED_FIELD:
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 <= value <= SEED_HIGH:
+                raise ConfigError(f"options.{key}", value, f"an integer 0 .. {SEED_HIGH}")
+            scenario[key] = int(value)
+            continue
+        lo, hi = SCENARIO_RANGES[key]
+        try:
+            v = float(value)
+        except (TypeError, ValueError):
+            raise ConfigError(f"options.{key}", value, "a number") from None
+        if not (lo <= v <= hi):
+            raise ConfigError(f"options.{key}", value, f"{lo} .. {hi}")
+        scenario[key] = v
+    return scenario
+
+
+class InstallationCore:
+    """One episode slot: a simulator started from a cached equilibrium and the RL bookkeeping around it.
+
+    Parameters
+    ----------
+    cfg : EnvConfig
+    cache : EquilibriumCache, optional
+        Shared between the slots of a vector env.
+    factory : SceneFactory, optional
+    """
+
+    MODEL_CACHE_ENTRIES = 256
+
+    def __init__(self, cfg: EnvConfig, cache: EquilibriumCache | None = None,
+                 factory: SceneFactory | None = None) -> None:
+        self.cfg = cfg
+        self.factory = factory or SceneFactory(cfg)
+        self.cache = cache or EquilibriumCache(cfg.statics)
+        self._models = self.factory.models  # shared by the cores of a vector env
+        self.sim: Simulator | None = None
+        self.max_steps = max(1, int(math.ceil(cfg.control.max_pre_release_s / cfg.control.interval_s - 1e-9)))
+        self.scenario: dict[str, Any] = {}
+        self.last_obs = np.zeros(len(OBS_NAMES), dtype=np.float32)
+        self.pending: Advance | None = None
+        self.done = True
+        self.advancer = None  # the BatchAdvancer of run_advance, made on first use
+
+    # --- episode start -----------------------------------------------------------------------------------------
+    def _model(self, scene, statics_data: dict[str, Any]) -> Model:
+        """Compiled model of ``scene``: the statics scene's model (cached) with the episode's sea state and chain
+        Cd_t (:func:`derive_model`), so that a new sea state costs no compile."""
+        key = scene_key(statics_data, self.cache.source_hash)
+        base = self._models.get(key)
+        if base is None:
+            base = compile_scene(scene_from_dict(json.loads(json.dumps(statics_data))))
+            self._models[key] = base
+            while len(self._models) > self.MODEL_CACHE_ENTRIES:
+                self._models.popitem(last=False)
+        else:
+            self._models.move_to_end(key)
+        return derive_model(base, scene)
+
+    def start(self, scenario: dict[str, Any]) -> Advance | None:
+        """Build the simulator of a scenario at its hanging equilibrium; the warm-up to run, if any.
+
+        Raises
+        ------
+        ConfigError, StaticsNotConverged
+            If the scenario gives no valid scene or no equilibrium.
+        """
+        cfg = self.cfg
+        scene = self.factory.scene(scenario)
+        statics_data = self.factory.statics_data(scenario)
+        model = self._model(scene, statics_data)
+        state, origin = self.cache.state(statics_data)
+        if state.node_pos.shape != model.node_pos0.shape or state.seg_i.shape != model.seg_i.shape:
+            raise StaticsNotConverged("cached equilibrium does not match the compiled scene's topology")
+        sim = Simulator(model)
+        sim.state = state
+        self.sim = sim
+        self.scenario = dict(scenario)
+        self.statics_origin = origin
+        self.depth = scene.environment.water_depth_m
+        self.hs = scene.environment.sea_state.hs_m
+        self.tp = scene.environment.sea_state.tp_s
+        self.ramp_s = cfg.control.warmup_s if cfg.control.warmup_s > 0 else 2.0 * self.tp
+        self.lines = {name: info.index for name, info in model.lines.items()}
+        self.vertical_chain_m = scene.installation.vertical_chain_length_m
+        self.chain_material = scene.installation.chain_material
+        fibre_index = model.material_names.index(scene.installation.fibre_material)
+        self.fibre_mat = fibre_index
+        self.mbl = {name: min(scene.materials[m].mbl_n for m in info.materials) for name, info in model.lines.items()}
+        self.release_unit_limit_n = scene.release_unit.max_release_load_n
+        self.max_fall_s = scene.simulation.max_fall_time_s
+        self.spacing_rate = 0.0
+        self.payout_rate = 0.0
+        self.steps = 0
+        self.released = False
+        self.done = False
+        self.status = "running"
+        self.flags = {"tension": False, "release_unit": False, "fibre_seabed": False}
+        self.failed_at_start: str | None = None
+        self.release_ref = sim.state.node_pos[model.release_node].copy()
+        tip, _ = sim.tip_state()
+        self.target_xy = tip[:2].copy()
+        self.touchdown: dict[str, float] | None = None
+        self.t0 = 0.0
+        if self.hs > 0.0 and cfg.control.warmup_s > 0.0:
+            sim.set_vessel_motion(sim.state.t, cfg.control.warmup_s, np.zeros(2), ramp_s=self.ramp_s)
+            self.pending = Advance(sim.state.t + cfg.control.warmup_s, False, PHASE_WARMUP)
+        else:
+            self.pending = None
+        return self.pending
+
+    def finish_start(self, error: SimulationDiverged | None = None) -> tuple[np.ndarray, dict[str, Any]]:
+        """After the warm-up (if any): the first observation and the reset info."""
+        sim = self.sim
+        if error is not None:
+            # keep the episode well defined: the first step ends it with the failure penalty
+            self.failed_at_start = f"diverged during warm-up: {error}"
+            self.status = self.failed_at_start
+        self.t0 = sim.state.t
+        self.pending = None
+        sim.state.line_f[:, L.LF_MAX_TENSION] = 0.0  # tension maxima count from the first observation
+        obs = self.observe() if error is None else self.last_obs.copy()
+        info = {"scenario": dict(self.scenario), "sim_status": self.status, "statics": self.statics_origin,
+                "t_s": 0.0}
+        return obs, info
+
+    # --- steps -------------------------------------------------------------------------------------------------
+    @property
+    def time_s(self) -> float:
+        """Time since the first observation [s]."""
+        return self.sim.state.t - self.t0
+
+    def spacing_m(self) -> float:
+        """Distance between the two vessels' mean positions [m]."""
+        v = self.sim.vessel_mean_m
+        return float(v[VESSEL_SECOND, 0] - v[VESSEL_INSTALLATION, 0])
+
+    def line_length_total_m(self) -> float:
+        """Mooring line including the vertical chain [m] (unstretched)."""
+        st = self.sim.state
+        idx = self.lines["mooring_line"]
+        segs = (st.seg_i[:, L.SI_LINE] == idx) & (st.seg_i[:, L.SI_ACTIVE] == 1)
+        return float(np.sum(st.seg_f[segs, L.SF_L0])) + self.vertical_chain_m
+
+    def begin_step(self, action: np.ndarray) -> Advance | None:
+        """Apply an action; the integration it needs (None when the episode ends without one)."""
+        cfg = self.cfg.control
+        sim = self.sim
+        a = np.clip(np.asarray(action, dtype=np.float64).reshape(3), -1.0, 1.0)
+        if not np.all(np.isfinite(a)):
+            a = np.where(np.isfinite(a), a, 0.0)  # NaN actions hold position and do not release
+        if self.failed_at_start is not None:
+            self.pending = None
+            return None
+        t = sim.state.t
+        if a[2] > 0.0:
+            sim.set_payout_rate("mooring_line", 0.0)
+            self.payout_rate = 0.0
+            self.spacing_rate = 0.0
+            sim.release()
+            self.released = True
+            sim.set_vessel_motion(t, self.max_fall_s + 1.0, np.zeros(2), ramp_s=self.ramp_s)
+            self.pending = Advance(t + self.max_fall_s, True, PHASE_FALL)
+            return self.pending
+        dt = cfg.interval_s
+        # DP vessel: commanded speed, acceleration-limited, kept inside the spacing limits
+        cmd = a[0] * cfg.spacing_rate_max_m_s
+        dv = cfg.spacing_accel_max_m_s2 * dt
+        v = min(max(cmd, self.spacing_rate - dv), self.spacing_rate + dv)
+        s = self.spacing_m()
+        s_max = cfg.spacing_max_over_depth * self.depth
+        v = min(max(v, (cfg.spacing_min_m - s) / dt), (s_max - s) / dt)
+        # winch: pay out (+) or haul in (-), kept inside the line-length limits
+        rate = a[1] * (cfg.payout_rate_max_m_s if a[1] > 0.0 else cfg.haul_rate_max_m_s)
+        length = self.line_length_total_m()
+        lo = cfg.line_length_min_over_depth * self.depth
+        hi = cfg.line_length_max_over_depth * self.depth
+        rate = min(max(rate, (lo - length) / dt), (hi - length) / dt)
+        self.spacing_rate = float(v)
+        self.payout_rate = float(rate)
+        sim.set_vessel_motion(t, dt, np.array([0.0, v]), ramp_s=self.ramp_s)
+        sim.set_payout_rate("mooring_line", float(rate))
+        self.pending = Advance(t + dt, False, PHASE_CONTROL)
+        return self.pending
+
+    def begin_hold(self, t_end_s: float) -> Advance | None:
+        """Hold the vessels (second vessel stopped) and the winch until ``t_end_s`` (AnchorPlan-v0's wait)."""
+        if self.failed_at_start is not None:
+            self.pending = None
+            return None
+        sim = self.sim
+        t = sim.state.t
+        sim.set_payout_rate("mooring_line", 0.0)
+        self.payout_rate = 0.0
+        self.spacing_rate = 0.0
+        sim.set_vessel_motion(t, max(t_end_s - t, sim.dt), np.zeros(2), ramp_s=self.ramp_s)
+        self.hold_start_s = t
+        self.pending = Advance(t_end_s, False, PHASE_HOLD)
+        return self.pending
+
+    def finish_step(self, status: int | None, error: SimulationDiverged | None
+                    ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """Observation, reward, terminated, truncated and info after the integration of ``begin_step``."""
+        rcfg = self.cfg.reward
+        terms = dict.fromkeys(REWARD_TERMS, 0.0)
+        phase = self.pending.phase if self.pending is not None else None
+        self.pending = None
+        terminated = truncated = False
+        if self.failed_at_start is not None or error is not None:
+            if error is not None:
+                self.status = f"diverged: {error}"
+            terms["failure"] = -rcfg.failure_penalty
+            terminated = True
+            obs = self.last_obs.copy()
+        else:
+            if phase == PHASE_CONTROL:
+                self.steps += 1
+                terms["time"] = -rcfg.time_cost_per_s * self.cfg.control.interval_s
+                self._check_limits(terms)
+                if self.steps >= self.max_steps:
+                    truncated = True
+                    terms["truncation"] = -rcfg.truncation_penalty
+                    self.status = "time limit"
+            elif phase == PHASE_HOLD:
+                terms["time"] = -rcfg.time_cost_per_s * (self.sim.state.t - self.hold_start_s)
+                self._check_limits(terms)
+            else:  # the fall
+                terminated = True
+                self._check_limits(terms)
+                if status == L.STATUS_TOUCHDOWN:
+                    self.status = "touchdown"
+                    self._touchdown_terms(terms)
+                else:
+                    self.status = "no touchdown within max_fall_time_s"
+                    terms["no_touchdown"] = -rcfg.no_touchdown_penalty
+            obs = self.observe()
+        reward = float(sum(terms.values()))
+        self.done = terminated or truncated
+        info = self.info(terms)
+        return obs, reward, terminated, truncated, info
+
+    def info(self, terms: dict[str, float]) -> dict[str, Any]:
+        """Step info (see the env docstring)."""
+        st = self.sim.state
+        info: dict[str, Any] = {
+            "reward_terms": terms,
+            "sim_status": self.status,
+            "t_s": float(self.time_s) if self.failed_at_start is None else 0.0,
+            "released": self.released,
+            "spacing_m": self.spacing_m(),
+            "max_tension_n": {name: float(st.line_f[i, L.LF_MAX_TENSION]) for name, i in self.lines.items()},
+        }
+        if self.touchdown is not None:
+            info["touchdown"] = dict(self.touchdown)
+        return info
+
+    def _check_limits(self, terms: dict[str, float]) -> None:
+        rcfg = self.cfg.reward
+        st = self.sim.state
+        if not self.flags["tension"]:
+            if any(st.line_f[i, L.LF_MAX_TENSION] > self.mbl[name] for name, i in self.lines.items()):
+                self.flags["tension"] = True
+                terms["tension"] = -rcfg.tension_penalty
+        if not self.flags["release_unit"] and "wire" in self.lines:
+            # running maximum over the wire's segments: exceeds the load at the unit by at most the wire's weight
+            if st.line_f[self.lines["wire"], L.LF_MAX_TENSION] > self.release_unit_limit_n:
+                self.flags["release_unit"] = True
+                terms["release_unit"] = -rcfg.release_unit_penalty
+        if not self.flags["fibre_seabed"]:
+            if self._fibre_clearance_m() < rcfg.fibre_clearance_m:
+                self.flags["fibre_seabed"] = True
+                terms["fibre_seabed"] = -rcfg.fibre_seabed_penalty
+
+    def _touchdown_terms(self, terms: dict[str, float]) -> None:
+        rcfg = self.cfg.reward
+        sim = self.sim
+        td = sim.work.touchdown
+        vel = td[L.TD_VEL:L.TD_VEL + 3]
+        speed = float(np.linalg.norm(vel))
+        tilt = float(math.degrees(math.acos(min(1.0, max(-1.0, -td[L.TD_AXIS + 2])))))
+        offset = float(np.hypot(td[L.TD_TIP] - self.target_xy[0], td[L.TD_TIP + 1] - self.target_xy[1]))
+        pile = float(sim.line_length_on_seabed_m({self.chain_material}))
+        terms["speed"] = rcfg.speed_weight * min(1.0, max(0.0, 1.0 - max(0.0, rcfg.required_speed_m_s - speed)
+                                                          / rcfg.speed_falloff_m_s))
+        terms["tilt"] = rcfg.tilt_weight * (1.0 - tilt / rcfg.tilt_criterion_deg)
+        if tilt > rcfg.tilt_criterion_deg:
+            terms["tilt"] -= rcfg.tilt_excess_penalty
+        terms["offset"] = rcfg.offset_weight * (1.0 - min(offset / rcfg.offset_tolerance_m, 2.0))
+        excess = max(0.0, pile - rcfg.chain_pile_allowance_m)
+        if excess > 0.0:
+            terms["chain_pile"] = -rcfg.chain_pile_penalty * min(1.0, excess / rcfg.chain_pile_scale_m)
+        self.touchdown = {"speed_m_s": speed, "vertical_speed_m_s": float(-vel[2]), "tilt_deg": tilt,
+                          "offset_m": offset, "fall_time_s": float(td[L.TD_TIME] - sim.release_time_s),
+                          "chain_on_seabed_m": pile}
+
+    # --- observation -------------------------------------------------------------------------------------------
+    def _line_nodes(self, line: str, material: int | None = None) -> np.ndarray:
+        st = self.sim.state
+        segs = (st.seg_i[:, L.SI_LINE] == self.lines[line]) & (st.seg_i[:, L.SI_ACTIVE] == 1)
+        if material is not None:
+            segs &= st.seg_i[:, L.SI_MAT] == material
+        return np.unique(np.concatenate([st.seg_i[segs, L.SI_A], st.seg_i[segs, L.SI_B]]))
+
+    def _fibre_clearance_m(self) -> float:
+        nodes = self._line_nodes("mooring_line", self.fibre_mat)
+        if nodes.size == 0:
+            return math.inf
+        return float(self.sim.state.node_pos[nodes, 2].min() + self.depth)
+
+    def raw_observation(self) -> np.ndarray:
+        """Observation in physical units (see :data:`OBS_SPEC`)."""
+        sim = self.sim
+        st = sim.state
+        m = sim.model
+        tensions = sim.top_tensions_n()
+        rn = m.release_node
+        b = st.body_state
+        e = b[L.BS_AXIS:L.BS_AXIS + 3]
+        w = b[L.BS_OMEGA:L.BS_OMEGA + 3]
+        axis_rate = float(np.linalg.norm(w - np.dot(w, e) * e))
+        _, _, hz, _, _, hvz = track_state(sim.tracks, VESSEL_INSTALLATION, st.t, sim.env_f)
+        cx, cy, _ = current_velocity(0.0, sim.env_f, m.current_profile)
+        tip, _ = sim.tip_state()
+        loop = self._line_nodes("mooring_line")
+        loop_bottom = float(st.node_pos[loop, 2].min() + self.depth) if loop.size else 0.0
+        fibre = self._fibre_clearance_m()
+        raw = np.array([
+            self.time_s / self.cfg.control.max_pre_release_s,
+            1.0 if self.released else 0.0,
+            self.spacing_m(),
+            self.spacing_rate,
+            self.line_length_total_m() / self.depth,
+            self.payout_rate,
+            st.node_pos[rn, 0] - self.release_ref[0],
+            st.node_pos[rn, 1] - self.release_ref[1],
+            st.node_pos[rn, 2] - self.release_ref[2],
+            st.node_vel[rn, 0],
+            st.node_vel[rn, 1],
+            st.node_vel[rn, 2],
+            sim.tilt_deg(),
+            math.degrees(axis_rate),
+            tensions.get("wire", 0.0) / 1e6,
+            tensions.get("mooring_line", 0.0) / 1e6,
+            hz + m.scene.installation.fairlead_depth_m,
+            hvz,
+            cx,
+            cy,
+            self.depth,
+            tip[2] + self.depth,
+            loop_bottom,
+            fibre if math.isfinite(fibre) else 1000.0,
+            self.hs,
+            self.tp,
+            self.vertical_chain_m,
+        ], dtype=np.float64)
+        return raw
+
+    def observe(self) -> np.ndarray:
+        """Normalised float32 observation, clipped to +-OBS_CLIP; the last finite one if the state is not."""
+        raw = self.raw_observation()
+        obs = (raw - OBS_OFFSET) / OBS_SCALE
+        if not np.all(np.isfinite(obs)):
+            return self.last_obs.copy()
+        obs = np.clip(obs, -OBS_CLIP, OBS_CLIP).astype(np.float32)
+        self.last_obs = obs.copy()
+        return obs
+
+    # --- drawing -----------------------------------------------------------------------------------------------
+    def snapshot(self) -> dict[str, Any]:
+        """Geometry for a frame (copies): line polylines with materials, anchor, vessels, current."""
+        sim = self.sim
+        st = sim.state
+        m = sim.model
+        lines = {}
+        for name, idx in self.lines.items():
+            li = st.line_i[idx]
+            if not st.seg_i[li[L.LI_SEG_START], L.SI_ACTIVE]:
+                continue
+            segs = np.arange(li[L.LI_SEG_START], li[L.LI_SEG_START] + li[L.LI_NSEG])
+            nodes = np.concatenate([[st.seg_i[segs[0], L.SI_A]], st.seg_i[segs, L.SI_B]])
+            mats = [m.material_names[k] for k in st.seg_i[segs, L.SI_MAT]]
+            lines[name] = (st.node_pos[nodes].copy(), mats)
+        tip, vel = sim.tip_state()
+        axis = st.body_state[L.BS_AXIS:L.BS_AXIS + 3].copy()
+        vessels = []
+        for v in range(sim.vessel_mean_m.shape[0]):
+            x, y, z, *_ = track_state(sim.tracks, v, st.t, sim.env_f)
+            vessels.append((x, z))
+        profile = m.current_profile
+        depths = np.linspace(0.0, self.depth * 0.95, 6)
+        current = [(-d, *current_velocity(-d, sim.env_f, profile)[:2]) for d in depths]
+        return {"t_s": self.time_s, "depth_m": self.depth, "lines": lines, "tip": tip.copy(),
+                "back": tip - m.body_f[L.BF_LENGTH] * axis, "tip_speed_m_s": float(np.linalg.norm(vel)),
+                "tilt_deg": sim.tilt_deg(), "vessels": vessels, "current": current, "released": self.released,
+                "status": self.status, "chain_material": self.chain_material,
+                "fibre_material": m.material_names[self.fibre_mat], "hs_m": self.hs, "target_xy": self.target_xy}
+
+
+def run_advance(core: InstallationCore, adv: Advance, chunk_s: float | None = None,
+                on_chunk=None) -> tuple[int | None, SimulationDiverged | None]:
+    """Integrate one core's simulator as ``adv`` asks (optionally in chunks with a callback, e.g. frames).
+
+    The integration goes through :func:`moor_env.envs.batch.advance_many` with one scene, the kernel the batched
+    vector env uses, so that both give bit-identical episodes. Chunking never changes the result: the kernel
+    takes whole steps of dt from the same start time.
+    """
+    from moor_env.envs.batch import BatchAdvancer  # noqa: PLC0415 - numba typed lists, built on first use
+
+    if core.advancer is None:
+        core.advancer = BatchAdvancer()
+    sim = core.sim
+    chunk_s = None if chunk_s is None or on_chunk is None else max(chunk_s, sim.dt)
+    status = L.STATUS_TIME_LIMIT
+    while sim.state.t < adv.t_end_s - 0.5 * sim.dt:
+        t_stop = adv.t_end_s if chunk_s is None else min(sim.state.t + chunk_s, adv.t_end_s)
+        status, error = core.advancer.run({0: (sim, t_stop, adv.detect_touchdown)})[0]
+        if error is not None:
+            return None, error
+        if chunk_s is not None:
+            on_chunk()
+        if status == L.STATUS_TOUCHDOWN:
+            break
+    return status, None

@@ -1,0 +1,134 @@
+"""Frames of the installation for ``render_mode="rgb_array"`` (matplotlib Agg, no display needed).
+
+Left panel: the whole water column in the x-z plane (vertical exaggeration as needed): sea surface, seabed,
+both vessels (with their wave motion), the installation wire, the vertical chain, the mooring line (chain dark,
+fibre rope orange), the anchor and current arrows over depth. Right panel: a true-scale zoom on the anchor with
+the planned landing point.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.patches import Polygon
+
+WATER = "#dceefb"
+SEABED = "#b49a6e"
+WIRE = "#6b6b6b"
+CHAIN = "#202020"
+FIBRE = "#e08a1e"
+ANCHOR = "#b0182b"
+
+
+class FrameRenderer:
+    """Draws snapshots (:meth:`moor_env.envs.core.InstallationCore.snapshot`) into RGB arrays.
+
+    Parameters
+    ----------
+    width_px, height_px : int
+        Frame size [pixels].
+    """
+
+    def __init__(self, width_px: int = 720, height_px: int = 480) -> None:
+        self.dpi = 100
+        self.fig = Figure(figsize=(width_px / self.dpi, height_px / self.dpi), dpi=self.dpi)
+        self.canvas = FigureCanvasAgg(self.fig)
+        self.width_px = width_px
+        self.height_px = height_px
+
+    def draw(self, snap: dict[str, Any]) -> np.ndarray:
+        """One frame, shape (height_px, width_px, 3), dtype uint8."""
+        fig = self.fig
+        fig.clear()
+        ax = fig.add_axes((0.07, 0.09, 0.58, 0.82))
+        zoom = fig.add_axes((0.72, 0.09, 0.26, 0.82))
+        self._overview(ax, snap)
+        self._zoom(zoom, snap)
+        released = "falling" if snap["released"] and snap["status"] == "running" else snap["status"]
+        if not snap["released"]:
+            released = "hanging" if snap["status"] == "running" else snap["status"]
+        fig.suptitle(f"t = {snap['t_s']:6.1f} s   {released}   tilt {snap['tilt_deg']:.2f} deg   "
+                     f"tip speed {snap['tip_speed_m_s']:.1f} m/s   Hs {snap['hs_m']:.1f} m", fontsize=9)
+        self.canvas.draw()
+        frame = np.asarray(self.canvas.buffer_rgba())[:, :, :3].copy()
+        return frame
+
+    @staticmethod
+    def _draw_lines(ax, snap: dict[str, Any], lw: float = 1.0) -> None:
+        for name, (pos, mats) in snap["lines"].items():
+            x, z = pos[:, 0], pos[:, 2]
+            if name == "wire":
+                ax.plot(x, z, color=WIRE, lw=0.8 * lw, zorder=3)
+                continue
+            for k, mat in enumerate(mats):
+                color = FIBRE if mat == snap["fibre_material"] else CHAIN
+                width = 1.0 * lw if color == FIBRE else 1.6 * lw
+                ax.plot(x[k:k + 2], z[k:k + 2], color=color, lw=width, solid_capstyle="round", zorder=4)
+
+    def _overview(self, ax, snap: dict[str, Any]) -> None:
+        depth = snap["depth_m"]
+        xs = [v[0] for v in snap["vessels"]]
+        for pos, _ in snap["lines"].values():
+            xs += [pos[:, 0].min(), pos[:, 0].max()]
+        x_lo, x_hi = min(xs) - 60.0, max(xs) + 40.0
+        ax.set_xlim(x_lo, x_hi)
+        ax.set_ylim(-depth - 0.06 * depth, 0.08 * depth)
+        ax.axhspan(-depth, 0.0, color=WATER, zorder=0)
+        ax.axhspan(-depth - 0.1 * depth, -depth, color=SEABED, zorder=1)
+        ax.axhline(0.0, color="#2a6fb0", lw=0.8, zorder=1)
+        hull_w = 0.09 * (x_hi - x_lo)
+        hull_h = 0.025 * depth
+        for i, (x, z) in enumerate(snap["vessels"]):
+            hull = Polygon([(x - hull_w / 2, z + hull_h), (x + hull_w / 2, z + hull_h), (x + 0.35 * hull_w, z - hull_h),
+                            (x - 0.35 * hull_w, z - hull_h)], closed=True, color="#3c4a5a" if i == 0 else "#5b7d4f",
+                           zorder=5)
+            ax.add_patch(hull)
+            ax.text(x, z + 1.6 * hull_h, "installation" if i == 0 else "2nd vessel", ha="center", fontsize=7)
+        self._draw_lines(ax, snap)
+        tip, back = snap["tip"], snap["back"]
+        ax.plot([back[0], tip[0]], [back[2], tip[2]], color=ANCHOR, lw=3.0, zorder=6, solid_capstyle="butt")
+        ax.plot([snap["target_xy"][0]], [-depth], marker="v", color=ANCHOR, ms=5, zorder=6)
+        # current arrows: 1 m/s is 12 % of the panel width
+        scale = 0.12 * (x_hi - x_lo)
+        x0 = x_lo + 0.03 * (x_hi - x_lo)
+        for z, ux, _uy in snap["current"]:
+            if abs(ux) > 1e-3:
+                ax.annotate("", xy=(x0 + ux * scale + (0 if ux > 0 else 0.2 * scale), z),
+                            xytext=(x0 + (0 if ux > 0 else 0.2 * scale), z),
+                            arrowprops={"arrowstyle": "->", "color": "#2a6fb0", "lw": 1.0}, zorder=2)
+        if any(abs(c[1]) > 1e-3 for c in snap["current"]):
+            ax.text(x0, -0.05 * depth, "current", color="#2a6fb0", fontsize=7, va="top")
+        ax.set_xlabel("x [m]", fontsize=8)
+        ax.set_ylabel("z [m]", fontsize=8)
+        ax.tick_params(labelsize=7)
+
+    def _zoom(self, ax, snap: dict[str, Any]) -> None:
+        depth = snap["depth_m"]
+        tip, back = snap["tip"], snap["back"]
+        cx = 0.5 * (tip[0] + back[0])
+        cz = 0.5 * (tip[2] + back[2])
+        half_h = 22.0
+        half_w = half_h * (ax.get_position().width * self.width_px) / (ax.get_position().height * self.height_px)
+        cz = max(cz, -depth + half_h - 4.0)
+        ax.set_xlim(cx - half_w, cx + half_w)
+        ax.set_ylim(cz - half_h, cz + half_h)
+        ax.set_aspect("equal", adjustable="box")
+        ax.axhspan(-depth, cz + half_h + 10, color=WATER, zorder=0)
+        ax.axhspan(-depth - 50, -depth, color=SEABED, zorder=1)
+        self._draw_lines(ax, snap, lw=1.8)
+        axis = tip - back
+        axis /= max(np.linalg.norm(axis), 1e-9)
+        normal = np.array([-axis[2], 0.0, axis[0]])
+        r = 0.6
+        body = [back + r * normal, tip + r * normal - 1.0 * axis, tip, tip - 1.0 * axis - r * normal, back - r * normal]
+        ax.add_patch(Polygon([(p[0], p[2]) for p in body], closed=True, color=ANCHOR, zorder=6))
+        for side in (1, -1):  # fins on the aft 5 m
+            fin = [back + side * r * normal, back + side * 1.6 * normal + 0.5 * axis,
+                   back + 5.0 * axis + side * r * normal]
+            ax.add_patch(Polygon([(p[0], p[2]) for p in fin], closed=True, color="#7a0f1d", zorder=6))
+        ax.plot([snap["target_xy"][0]], [-depth], marker="v", color=ANCHOR, ms=6, zorder=7)
+        ax.set_title(f"anchor, tip {tip[2] + depth:.1f} m above seabed", fontsize=8)
+        ax.tick_params(labelsize=7)

@@ -1,0 +1,51 @@
+"""The env docstrings' tables match the code (observation names and units, actions, reward terms)."""
+
+from __future__ import annotations
+
+import re
+
+from moor_env.envs import ACTION_NAMES, OBS_SPEC, REWARD_TERMS, AnchorPlanEnv, AnchorReleaseEnv
+from moor_env.envs.anchor_plan import PLAN_ACTION_NAMES
+
+SECTIONS = ("Description", "Action Space", "Observation Space", "Rewards", "Starting State", "Episode End",
+            "Arguments", "Version History")
+
+
+def _section(doc: str, name: str) -> str:
+    match = re.search(rf"^\s*## {name}\s*$(.*?)(?=^\s*## |\Z)", doc, flags=re.M | re.S)
+    assert match, f"section '{name}' missing"
+    return match.group(1)
+
+
+def _table(text: str) -> list[list[str]]:
+    rows = [line.strip() for line in text.splitlines() if line.strip().startswith("|")]
+    cells = [[c.strip() for c in row.strip("|").split("|")] for row in rows]
+    return [c for c in cells[2:]]  # drop header and separator
+
+
+def test_sections_in_order():
+    for env in (AnchorReleaseEnv, AnchorPlanEnv):
+        positions = [env.__doc__.find(f"## {name}") for name in SECTIONS]
+        assert all(p >= 0 for p in positions) and positions == sorted(positions), env.__name__
+
+
+def test_release_tables_match_code():
+    doc = AnchorReleaseEnv.__doc__
+    obs = _table(_section(doc, "Observation Space"))
+    assert [int(r[0]) for r in obs] == list(range(len(OBS_SPEC)))
+    for row, (name, unit, offset, scale, _) in zip(obs, OBS_SPEC, strict=True):
+        assert row[1] == name and row[2] == unit
+        assert float(row[3]) == offset and float(row[4]) == scale, name
+    assert f"({len(OBS_SPEC)},)" in _section(doc, "Observation Space")
+    actions = _table(_section(doc, "Action Space"))
+    assert [r[1] for r in actions] == list(ACTION_NAMES)
+    assert f"({len(ACTION_NAMES)},)" in _section(doc, "Action Space")
+    rewards = _table(_section(doc, "Rewards"))
+    assert [r[0] for r in rewards] == list(REWARD_TERMS)
+
+
+def test_plan_tables_match_code():
+    doc = AnchorPlanEnv.__doc__
+    actions = _table(_section(doc, "Action Space"))
+    assert [r[1] for r in actions] == list(PLAN_ACTION_NAMES)
+    assert f"({len(OBS_SPEC)},)" in _section(doc, "Observation Space")
