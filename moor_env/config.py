@@ -392,7 +392,8 @@ def _validation_to_config_error(exc: ValidationError, data: dict[str, Any]) -> C
 
 
 def scene_from_dict(data: dict[str, Any]) -> SceneConfig:
-    """Validate a plain dict (as read from YAML) into a :class:`SceneConfig`.
+    """Validate a plain dict (as read from YAML) into a :class:`SceneConfig`, filling the discretization
+    keys it does not set from its ``fidelity`` preset.
 
     Raises
     ------
@@ -400,7 +401,7 @@ def scene_from_dict(data: dict[str, Any]) -> SceneConfig:
         On the first invalid key, naming it with its value and allowed range.
     """
     try:
-        scene = SceneConfig.model_validate(data)
+        scene = SceneConfig.model_validate(apply_fidelity(copy.deepcopy(data)))
     except ValidationError as exc:
         raise _validation_to_config_error(exc, data) from None
     check_scene_consistency(scene)
@@ -436,7 +437,7 @@ def load_scene(scene: str | Path, overrides: dict[str, Any] | None = None) -> Sc
     data = scene_dict(scene)
     for key, value in (overrides or {}).items():
         _apply_override(data, key, value)
-    return scene_from_dict(apply_fidelity(data))
+    return scene_from_dict(data)
 
 
 def fidelity_presets() -> dict[str, dict[str, Any]]:
