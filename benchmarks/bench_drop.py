@@ -31,25 +31,13 @@ sys.path.insert(0, str(ROOT))
 from moor_env import load_scene, simulate_drop, solve_statics  # noqa: E402
 from moor_env.crosscheck.moordyn import run_moordyn_drop  # noqa: E402
 
+from _machine import machine  # noqa: E402
+
 SCENE = "gjoa-500"
 REPEATS = 3
 REFERENCE = {"discretization.vertical_chain_segment_m": 0.25, "discretization.loop_chain_segment_m": 0.25}
 CHECK = {"discretization.vertical_chain_segment_m": 0.5, "discretization.loop_chain_segment_m": 0.5}
 RESULTS = ROOT / "benchmarks" / "results" / "bench_drop.json"
-
-
-def machine() -> str:
-    """Processor name and logical core count of this machine."""
-    name = platform.processor()
-    if not name or name in ("x86_64", "aarch64"):
-        try:
-            for line in Path("/proc/cpuinfo").read_text().splitlines():
-                if line.startswith("model name"):
-                    name = line.split(":", 1)[1].strip()
-                    break
-        except OSError:
-            pass
-    return f"{name or platform.machine()}, {os.cpu_count()} logical cores, {platform.system()}"
 
 
 def main() -> dict:

@@ -34,25 +34,14 @@ import gymnasium as gym  # noqa: E402
 import moor_env  # noqa: E402, F401 - registers the envs
 from moor_env.envs import AnchorReleaseVectorEnv  # noqa: E402
 
+from _machine import machine  # noqa: E402
+
 RESULTS = ROOT / "benchmarks" / "results" / "bench_env.json"
 ENV_ID = "moor_env/AnchorRelease-v0"
 SCENE = {"water_depth_m": 500.0, "vessel_spacing_over_depth": 0.1, "mooring_line_length_over_depth": 1.08,
          "current_scale": 0.0, "anchor_mass_scale": 1.0}
 OVERRIDES = {f"scenario.{k}": v for k, v in SCENE.items()}  # autoresets draw from the config: fix it there
 RELEASE_STEP = 59  # 0-based: 59 holding steps, release on the 60th
-
-
-def machine() -> str:
-    """Processor name and logical core count of this machine."""
-    name = ""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                name = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return f"{name or platform.machine()}, {os.cpu_count()} logical cores, {platform.system()}"
 
 
 def _proc_cpu_s(pid: int) -> float:

@@ -1,0 +1,21 @@
+"""What the benchmarks record about the machine they ran on."""
+
+from __future__ import annotations
+
+import os
+import platform
+from pathlib import Path
+
+
+def machine() -> str:
+    """Processor name and logical core count of this machine."""
+    name = platform.processor()
+    if not name or name in ("x86_64", "aarch64"):
+        try:
+            for line in Path("/proc/cpuinfo").read_text().splitlines():
+                if line.startswith("model name"):
+                    name = line.split(":", 1)[1].strip()
+                    break
+        except OSError:
+            pass
+    return f"{name or platform.machine()}, {os.cpu_count()} logical cores, {platform.system()}"
