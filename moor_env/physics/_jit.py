@@ -1,7 +1,7 @@
 """numba options for every kernel, in one place.
 
 ``jit`` is ``numba.njit`` with ``cache=True``, ``nogil=True`` and a fastmath flag set *without* ``nnan`` and
-``ninf`` (``fastmath=True`` would turn NaN checks into no-ops and blow-ups would go unnoticed).
+``ninf`` (enabling every fastmath flag would turn NaN checks into no-ops and blow-ups would go unnoticed).
 
 numba's on-disk cache is keyed on the file of the jitted entry point only; an edit to a jitted callee
 in another module would leave a stale entry point in the cache (numba issues #1833, #9483). Unless the user

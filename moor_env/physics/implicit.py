@@ -65,6 +65,7 @@ from moor_env.physics._jit import jit
 from moor_env.physics.anchor import rotate_axis
 from moor_env.physics.environment import current_velocity
 from moor_env.physics.hydro import add_slender_added_mass
+from moor_env.physics.line import segment_axis
 from moor_env.physics.layout import (
     BF_M11,
     BF_M12,
@@ -175,13 +176,7 @@ def _segment_gain(s, h, orow, node_pos, seg_i, seg_f, mat_f, seg_tension):
     b = seg_i[s, SI_B]
     m = seg_i[s, SI_MAT]
     l0 = seg_f[s, SF_L0]
-    dx = node_pos[b, 0] - node_pos[a, 0]
-    dy = node_pos[b, 1] - node_pos[a, 1]
-    dz = node_pos[b, 2] - node_pos[a, 2]
-    length = math.sqrt(dx * dx + dy * dy + dz * dz)
-    qx = dx / length
-    qy = dy / length
-    qz = dz / length
+    length, qx, qy, qz = segment_axis(node_pos, a, b)
     ea = mat_f[m, MF_EA]
     kq = ea / l0
     cq = mat_f[m, MF_ZETA] * math.sqrt(ea * mat_f[m, MF_MASS])  # BA / l0
@@ -402,18 +397,7 @@ def _assemble(h, first, body_node, node_pos, node_vel, node_i, node_f, seg_i, se
         d = mat_f[m, MF_D]
         cn = 0.5 * rho * mat_f[m, MF_CDN] * d * half
         ct = 0.5 * rho * mat_f[m, MF_CDT] * math.pi * d * half
-        dx = node_pos[b, 0] - node_pos[a, 0]
-        dy = node_pos[b, 1] - node_pos[a, 1]
-        dz = node_pos[b, 2] - node_pos[a, 2]
-        length = math.sqrt(dx * dx + dy * dy + dz * dz)
-        if length > 0.0:
-            qx = dx / length
-            qy = dy / length
-            qz = dz / length
-        else:
-            qx = 0.0
-            qy = 0.0
-            qz = 1.0
+        length, qx, qy, qz = segment_axis(node_pos, a, b)
         volume = 0.25 * math.pi * d * d * half
         for end in range(2):
             n = a if end == 0 else b
@@ -569,18 +553,7 @@ def _update_active_set(h, node_pos, node_vel, seg_i, seg_f, mat_f, node_acc, oro
             continue
         m = seg_i[s, SI_MAT]
         l0 = seg_f[s, SF_L0]
-        dx = node_pos[b, 0] - node_pos[a, 0]
-        dy = node_pos[b, 1] - node_pos[a, 1]
-        dz = node_pos[b, 2] - node_pos[a, 2]
-        length = math.sqrt(dx * dx + dy * dy + dz * dz)
-        if length > 0.0:
-            qx = dx / length
-            qy = dy / length
-            qz = dz / length
-        else:
-            qx = 0.0
-            qy = 0.0
-            qz = 1.0
+        length, qx, qy, qz = segment_axis(node_pos, a, b)
         rate0 = ((node_vel[b, 0] - node_vel[a, 0]) * qx + (node_vel[b, 1] - node_vel[a, 1]) * qy
                  + (node_vel[b, 2] - node_vel[a, 2]) * qz) / l0
         ddx = 0.0

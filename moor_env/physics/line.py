@@ -60,6 +60,18 @@ from moor_env.physics.layout import (
 
 
 @jit
+def segment_axis(node_pos, a, b):
+    """Stretched length [m] and unit tangent (from node a to node b) of a segment; +z for a zero-length one."""
+    dx = node_pos[b, 0] - node_pos[a, 0]
+    dy = node_pos[b, 1] - node_pos[a, 1]
+    dz = node_pos[b, 2] - node_pos[a, 2]
+    length = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if length > 0.0:
+        return length, dx / length, dy / length, dz / length
+    return length, 0.0, 0.0, 1.0
+
+
+@jit
 def segment_loads(node_pos, node_vel, seg_i, seg_f, mat_f, line_f, env_f, current_profile,
                   node_force, node_mm, node_mass, node_contact, seg_tension):
     """Accumulate every active segment's loads on its end nodes.
@@ -87,18 +99,7 @@ def segment_loads(node_pos, node_vel, seg_i, seg_f, mat_f, line_f, env_f, curren
         b = seg_i[s, SI_B]
         m = seg_i[s, SI_MAT]
         l0 = seg_f[s, SF_L0]
-        dx = node_pos[b, 0] - node_pos[a, 0]
-        dy = node_pos[b, 1] - node_pos[a, 1]
-        dz = node_pos[b, 2] - node_pos[a, 2]
-        length = math.sqrt(dx * dx + dy * dy + dz * dz)
-        if length > 0.0:
-            qx = dx / length
-            qy = dy / length
-            qz = dz / length
-        else:
-            qx = 0.0
-            qy = 0.0
-            qz = 1.0
+        length, qx, qy, qz = segment_axis(node_pos, a, b)
         strain = (length - l0) / l0
         if strain > max_strain:
             max_strain = strain
