@@ -217,6 +217,12 @@ class DiscretizationConfig(_Strict):
     integrator: Literal["symplectic_euler", "rk2", "implicit_euler"] = "symplectic_euler"
     dt_s: float | None = Field(None, gt=0.0, le=1.0, description="time step [s]; None derives it from the stability limit")
     dt_safety: float = Field(0.9, gt=0.0, le=1.0, description="fraction of the stability limit used when dt_s is derived")
+    fit_spacing_increase_m: float = Field(
+        0.0, ge=0.0, le=10000.0, description="widening of the vessel spacing before the release that a preset's "
+        "tight_line fit must cover (an env's controls can widen it during the episode) [m]")
+    fit_line_shortening_m: float = Field(
+        0.0, ge=0.0, le=10000.0, description="haul-in of the mooring line before the release that a preset's "
+        "tight_line fit must cover [m]")
 
 
 class SimulationConfig(_Strict):
@@ -402,6 +408,9 @@ def scene_from_dict(data: dict[str, Any]) -> SceneConfig:
     """
     try:
         scene = SceneConfig.model_validate(apply_fidelity(copy.deepcopy(data)))
+        fitted = fit_fidelity(scene, data)
+        if fitted is not None:
+            scene = SceneConfig.model_validate(fitted)
     except ValidationError as exc:
         raise _validation_to_config_error(exc, data) from None
     check_scene_consistency(scene)
@@ -459,8 +468,63 @@ def apply_fidelity(data: dict[str, Any]) -> dict[str, Any]:
     if not isinstance(disc, dict):
         return data
     for key, value in presets[name].items():
-        disc.setdefault(key, value)
+        if key != TIGHT_LINE:
+            disc.setdefault(key, value)
     return data
+
+
+TIGHT_LINE = "tight_line"  # preset entry: the resolution used where the mooring line tightens during the fall
+
+
+def fit_fidelity(scene: SceneConfig, data: dict[str, Any]) -> dict[str, Any] | None:
+    """``data`` with its preset's ``tight_line`` resolution where the scene needs it, else None.
+
+    A preset's ``tight_line`` entry (``slack_below_m``, ``chord_angle_above_deg`` and discretization keys)
+    applies where the mooring line from the release point, when the anchor touches down, has less slack than
+    ``slack_below_m`` or a chord steeper from the vertical than ``chord_angle_above_deg``
+    (:func:`mooring_line_slack`): there the chain loop is pulled during the fall, a coarse loop goes taut too
+    early, and it carries the tilt and the snap; a slack line hanging nearly straight down does not need it.
+    Keys the scene sets explicitly still win. The geometry checked is the worst the scene can reach before its
+    release: spacing widened by ``discretization.fit_spacing_increase_m`` and the line hauled in by
+    ``discretization.fit_line_shortening_m`` (both 0 for a scripted scene; an env sets them from its control
+    limits, so that an agent tightening the line mid-episode does not fall onto a resolution measured too coarse).
+    """
+    name = data.get("fidelity", "default")
+    rule = fidelity_presets().get(name, {}).get(TIGHT_LINE) if name != "custom" else None
+    disc = scene.discretization
+    geometry = mooring_line_slack(scene, tip_height_m=0.0, extra_spacing_m=disc.fit_spacing_increase_m,
+                                  haul_in_m=disc.fit_line_shortening_m) if rule else None
+    if geometry is None:
+        return None
+    slack_m, angle_deg = geometry
+    if slack_m >= rule["slack_below_m"] and angle_deg <= rule["chord_angle_above_deg"]:
+        return None
+    fitted = copy.deepcopy(data)
+    disc = fitted.setdefault("discretization", {})
+    for key, value in rule.items():
+        if key not in ("slack_below_m", "chord_angle_above_deg"):
+            disc.setdefault(key, value)
+    return apply_fidelity(fitted)
+
+
+def mooring_line_slack(scene: SceneConfig, tip_height_m: float, extra_spacing_m: float = 0.0,
+                       haul_in_m: float = 0.0) -> tuple[float, float] | None:
+    """Slack of the mooring line (free length from the release point to the second vessel minus its chord) [m]
+    and the chord's angle from the vertical [deg], with the anchor tip ``tip_height_m`` above the seabed, the
+    vertical chain hanging straight above the anchor and the spacing and line length as at the release (after
+    ``release_time_s`` of spacing move and payout), the spacing further widened by ``extra_spacing_m`` and the
+    line hauled in by ``haul_in_m`` [m]; None without a mooring line.
+    """
+    inst = scene.installation
+    if inst is None or scene.anchor is None or not inst.components.mooring_line:
+        return None
+    depth = scene.environment.water_depth_m
+    z_release = -(depth - tip_height_m - scene.anchor.length_m - inst.vertical_chain_length_m)
+    spacing = inst.vessel_spacing_m + inst.spacing_rate_m_s * inst.release_time_s + extra_spacing_m
+    rise = -(z_release + inst.fairlead_depth_m)
+    free_length = inst.mooring_line_length_m + inst.payout_rate_m_s * inst.release_time_s - haul_in_m
+    slack = free_length - inst.vertical_chain_length_m - math.hypot(spacing, rise)
+    return slack, math.degrees(math.atan2(spacing, rise))
 
 
 def check_scene_consistency(scene: SceneConfig) -> None:

@@ -54,7 +54,9 @@ class SimState:
 
     def copy(self) -> SimState:
         """Deep copy (arrays copied)."""
-        return SimState(**{k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in self.__dict__.items()})
+        return SimState(self.node_pos.copy(), self.node_vel.copy(), self.body_state.copy(), self.node_i.copy(),
+                        self.node_f.copy(), self.seg_i.copy(), self.seg_f.copy(), self.line_i.copy(),
+                        self.line_f.copy(), self.t, self.released)
 
 
 class Workspace:
@@ -118,19 +120,23 @@ class Simulator:
         speeds = np.asarray(horizontal_speed_m_s, float).reshape(nv)
         waves = self.sea is not None
         sample_dt = min(0.05, duration_s) if waves else max(duration_s, 1e-3)
-        self.tracks = sample_tracks(self.vessel_mean_m, speeds, t0_s, duration_s, sample_dt, self.sea,
-                                    self.env_f[L.EF_G])
+        tracks = sample_tracks(self.vessel_mean_m, speeds, t0_s, duration_s, sample_dt, self.sea,
+                               self.env_f[L.EF_G])
         if waves and ramp_s is None:
             ramp_s = self.sea["ramp_s"]
-        if waves and ramp_s:
-            times = t0_s + sample_dt * np.arange(self.tracks.shape[1])
+        if waves and ramp_s and t0_s < ramp_s:  # past the ramp the factor is 1
+            times = t0_s + sample_dt * np.arange(tracks.shape[1])
             factor = np.clip(times / ramp_s, 0.0, 1.0)
             smooth = factor * factor * (3.0 - 2.0 * factor)
             mean = self.vessel_mean_m[:, None, :] + speeds[:, None, None] * (times - t0_s)[None, :, None] * np.array(
                 [1.0, 0.0, 0.0])
-            self.tracks[:, :, :3] = mean + smooth[None, :, None] * (self.tracks[:, :, :3] - mean)
-            self.tracks[:, :, 3:] = speeds[:, None, None] * np.array([1.0, 0.0, 0.0]) + smooth[None, :, None] * (
-                self.tracks[:, :, 3:] - speeds[:, None, None] * np.array([1.0, 0.0, 0.0]))
+            tracks[:, :, :3] = mean + smooth[None, :, None] * (tracks[:, :, :3] - mean)
+            tracks[:, :, 3:] = speeds[:, None, None] * np.array([1.0, 0.0, 0.0]) + smooth[None, :, None] * (
+                tracks[:, :, 3:] - speeds[:, None, None] * np.array([1.0, 0.0, 0.0]))
+        if tracks.shape == self.tracks.shape:
+            self.tracks[...] = tracks  # same window length (every control step): the kernels' array stays put
+        else:
+            self.tracks = tracks
         self.env_f[L.EF_TRACK_T0] = t0_s
         self.env_f[L.EF_TRACK_DT] = sample_dt
         self.vessel_mean_m[:, 0] += speeds * duration_s
@@ -240,7 +246,7 @@ class Simulator:
             if not self.state.seg_i[k, L.SI_ACTIVE]:
                 out[name] = 0.0
             elif self.state.node_i[top, L.NI_KIND] == L.NODE_VESSEL:
-                out[name] = float(np.linalg.norm(self.work.node_force[top]))
+                out[name] = math.hypot(*self.work.node_force[top].tolist())
             else:  # a line ending at a free connection: its top segment's tension
                 out[name] = float(self.work.seg_tension[k])
         return out
@@ -504,7 +510,8 @@ def run_drop(sim: Simulator, wall_static_s: float = 0.0, keep_snapshots: bool = 
     wall = time.perf_counter() - t0
     td = sim.work.touchdown
     touched = status == L.STATUS_TOUCHDOWN
-    max_tension = {name: float(sim.state.line_f[info.index, L.LF_MAX_TENSION]) for name, info in sim.model.lines.items()}
+    max_tension = {name: float(sim.state.line_f[info.index, L.LF_MAX_TENSION])
+                   for name, info in sim.model.lines.items()}
     chain = {sc.installation.chain_material} if inst is not None else None
     result = DropResult(
         status="touchdown" if touched else "no touchdown within max_fall_time_s",

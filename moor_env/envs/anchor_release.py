@@ -70,6 +70,9 @@ class AnchorReleaseEnv(gym.Env):
     penetrate) and vertical (at most 5 deg tilt). Each step is ``control.interval_s`` of simulated time (default
     1 s) of the numba lumped-mass model (:class:`moor_env.Simulator`) with waves, current, the wire and both
     lines. A step whose release action is positive releases the anchor and simulates the fall to touchdown.
+    Before the release the implicit integrator steps ``control.pre_release_dt_s`` (0.1 s; waves of 7-13 s and
+    slow vessel moves), the fall at the scene's own step; the accuracy of that trade is measured by
+    ``benchmarks/pre_release_step.py``.
 
     ## Action Space
 

@@ -25,6 +25,8 @@ follows (see ``_slot_arrays``).
 
 from __future__ import annotations
 
+import time
+import weakref
 from concurrent.futures import ThreadPoolExecutor
 
 import numba
@@ -74,6 +76,7 @@ def advance_many(slots, t, t_end, dt, integrator, body_active, detect, node_pos,
 
 
 def _slot_arrays(sim: Simulator) -> list[np.ndarray]:
+    """The simulator's arrays in ``advance``'s argument order (checked for dtype, rank and layout)."""
     st, m, w = sim.state, sim.model, sim.work
     sources = {
         "node_pos": st.node_pos, "node_vel": st.node_vel, "body_state": st.body_state, "node_i": st.node_i,
@@ -94,6 +97,9 @@ def _slot_arrays(sim: Simulator) -> list[np.ndarray]:
     return out
 
 
+_TRACKS = [name for name, _, _ in _ARRAY_ARGS].index("tracks")
+
+
 def _dummy(dtype, ndim: int) -> np.ndarray:
     return np.zeros((1,) * ndim, dtype=dtype)
 
@@ -106,6 +112,10 @@ class BatchAdvancer:
     compiles a tuple signature per tuple length, and two specialisations may contract floating-point operations
     differently (see the module docstring).
 
+    The per-call Python work is kept small (it is paid on every env step): a simulator's argument list is built
+    and checked once and reused while its state stays the same object (only the vessel tracks are re-read, since
+    ``set_vessel_motion`` may replace them); the dummies are built once.
+
     Parameters
     ----------
     num_threads : int
@@ -114,11 +124,28 @@ class BatchAdvancer:
 
     def __init__(self, num_threads: int = 1) -> None:
         self.num_threads = max(1, int(num_threads))
-        self.pool = ThreadPoolExecutor(self.num_threads) if self.num_threads > 1 else None
+        self.pool = ThreadPoolExecutor(self.num_threads - 1) if self.num_threads > 1 else None
         self.dummies = [_dummy(dtype, ndim) for _, dtype, ndim in _ARRAY_ARGS]
+        self._columns: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # simulator -> (state, arrays)
+        self.kernel_s = 0.0  # CPU time inside the kernel, summed over threads (benchmarks/bench_env.py)
 
-    def _call(self, chunk: list[tuple[Simulator, float, bool]]) -> tuple[np.ndarray, ...]:
-        """One kernel call on up to BATCH_WIDTH scenes; returns the output arrays."""
+    def _column(self, sim: Simulator) -> list[np.ndarray]:
+        """``advance``'s per-scene arrays of ``sim``, cached while its state is the same object (the entry holds
+        it, so a new state can never pass for an old one; the entry goes with the simulator)."""
+        entry = self._columns.get(sim)
+        if entry is None or entry[0] is not sim.state:
+            entry = (sim.state, _slot_arrays(sim))
+            self._columns[sim] = entry
+        column = entry[1]
+        tracks = sim.tracks
+        if column[_TRACKS] is not tracks:
+            if tracks.dtype != np.float64 or tracks.ndim != 3 or not tracks.flags.c_contiguous:
+                raise TypeError("simulator array 'tracks' must be C-contiguous float64[3d]")
+            column[_TRACKS] = tracks
+        return column
+
+    def _call(self, chunk: list[tuple[Simulator, float, bool, float]]) -> tuple[tuple[np.ndarray, ...], float]:
+        """One kernel call on up to BATCH_WIDTH scenes; returns the output arrays and the kernel's CPU time."""
         w = BATCH_WIDTH
         t = np.zeros(w)
         t_end = np.zeros(w)
@@ -127,31 +154,35 @@ class BatchAdvancer:
         body_active = np.zeros(w, np.bool_)
         detect = np.zeros(w, np.bool_)
         columns = [self.dummies] * w
-        for i, (sim, t_stop, det) in enumerate(chunk):
-            columns[i] = _slot_arrays(sim)
+        for i, (sim, t_stop, det, step_s) in enumerate(chunk):
+            columns[i] = self._column(sim)
             t[i] = sim.state.t
             t_end[i] = t_stop
-            dt[i] = sim.dt
+            dt[i] = step_s
             integ[i] = sim.integrator_code
             body_active[i] = sim.model.body_active
             detect[i] = det
-        arrays = tuple(tuple(columns[i][k] for i in range(w)) for k in range(len(_ARRAY_ARGS)))
         out = (np.zeros(w, np.int64), np.zeros(w), np.zeros(w, np.int64), np.zeros(w, np.int64), np.zeros(w, np.int64))
-        advance_many(np.arange(len(chunk), dtype=np.int64), t, t_end, dt, integ, body_active, detect, *arrays, *out)
-        return out
+        t0 = time.thread_time()
+        advance_many(np.arange(len(chunk), dtype=np.int64), t, t_end, dt, integ, body_active, detect,
+                     *zip(*columns, strict=True), *out)
+        return out, time.thread_time() - t0
 
-    def _run_group(self, group: list[tuple[int, tuple[Simulator, float, bool]]]) -> list[tuple[int, tuple]]:
+    def _run_group(self, group: list[tuple[int, tuple[Simulator, float, bool, float]]]
+                   ) -> tuple[list[tuple[int, tuple]], float]:
         results = []
+        kernel_s = 0.0
         for start in range(0, len(group), BATCH_WIDTH):
             chunk = group[start:start + BATCH_WIDTH]
-            status, t_out, _, kind, index = self._call([job for _, job in chunk])
+            (status, t_out, _, kind, index), seconds = self._call([job for _, job in chunk])
+            kernel_s += seconds
             for j, (slot, _) in enumerate(chunk):
                 results.append((slot, (int(status[j]), float(t_out[j]), int(kind[j]), int(index[j]))))
-        return results
+        return results, kernel_s
 
-    def run(self, jobs: dict[int, tuple[Simulator, float, bool]]
+    def run(self, jobs: dict[int, tuple[Simulator, float, bool, float]]
             ) -> dict[int, tuple[int | None, SimulationDiverged | None]]:
-        """Advance ``{slot: (simulator, t_end_s, detect_touchdown)}``.
+        """Advance ``{slot: (simulator, t_end_s, detect_touchdown, dt_s)}``.
 
         Returns
         -------
@@ -162,11 +193,14 @@ class BatchAdvancer:
         items = sorted(jobs.items())
         groups = [items[g::self.num_threads] for g in range(min(self.num_threads, len(items)))]
         if len(groups) <= 1 or self.pool is None:
-            raw = [r for g in groups for r in self._run_group(g)]
+            done = [self._run_group(g) for g in groups]
         else:
-            # interleaved groups balance scenes of similar cost; the kernel holds no GIL
-            futures = [self.pool.submit(self._run_group, g) for g in groups]
-            raw = [r for f in futures for r in f.result()]
+            # interleaved groups balance scenes of similar cost; the kernel holds no GIL. The calling thread
+            # takes the first group itself rather than waiting idle.
+            futures = [self.pool.submit(self._run_group, g) for g in groups[1:]]
+            done = [self._run_group(groups[0])] + [f.result() for f in futures]
+        raw = [r for group_results, _ in done for r in group_results]
+        self.kernel_s += sum(seconds for _, seconds in done)
         results = {}
         for slot, (status, t_reached, kind, index) in raw:
             sim = jobs[slot][0]

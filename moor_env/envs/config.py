@@ -125,6 +125,11 @@ class ControlConfig(_Strict):
                                      description="pre-release time after which the episode is truncated [s]")
     warmup_s: float = Field(20.0, ge=0.0, le=600.0,
                             description="waves ramped in and simulated before the first observation when Hs > 0 [s]")
+    pre_release_dt_s: float | None = Field(
+        None, gt=0.0, le=0.5,
+        description="integration step before the release (warm-up, control, hold) with the implicit integrator "
+                    "[s]; each advance takes the whole number of equal steps nearest below it, never finer than "
+                    "the scene's step; null: the scene's step. The fall always uses the scene's step")
     spacing_rate_max_m_s: float = Field(0.5, gt=0.0, le=2.0,
                                         description="second vessel's largest horizontal speed (DP slow move) [m/s]")
     spacing_accel_max_m_s2: float = Field(0.05, gt=0.0, le=1.0,

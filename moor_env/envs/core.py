@@ -18,14 +18,26 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from pydantic import ValidationError
 
 from moor_env.compile import VESSEL_INSTALLATION, VESSEL_SECOND, Model, compile_scene
-from moor_env.config import SET_SHORTCUTS, scene_dict, scene_from_dict
+from moor_env.config import (
+    SET_SHORTCUTS,
+    EnvironmentConfig,
+    InstallationConfig,
+    MaterialConfig,
+    SceneConfig,
+    check_scene_consistency,
+    scene_dict,
+    scene_from_dict,
+)
 from moor_env.envs.config import SCENARIO_FIELDS, SCENARIO_RANGES, SEED_FIELD, SEED_HIGH, Choice, EnvConfig, Uniform
 from moor_env.envs.equilibria import EquilibriumCache, scene_key, statics_scene_dict
 from moor_env.errors import ConfigError, SimulationDiverged, StaticsNotConverged
 from moor_env.physics import layout as L
+from moor_env.physics._jit import jit
 from moor_env.physics.environment import current_velocity
+from moor_env.physics.integrate import INTEGRATOR_IMPLICIT_EULER
 from moor_env.physics.vessels import track_state
 from moor_env.simulation import Simulator
 
@@ -80,11 +92,13 @@ PHASE_HOLD = "hold"
 
 @dataclass
 class Advance:
-    """Integrate the core's simulator to ``t_end_s`` (to touchdown when ``detect_touchdown``)."""
+    """Integrate the core's simulator to ``t_end_s`` (to touchdown when ``detect_touchdown``) in steps of
+    ``dt_s``."""
 
     t_end_s: float
     detect_touchdown: bool
     phase: str
+    dt_s: float
 
 
 def apply_scene_overrides(base: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
@@ -110,9 +124,12 @@ class SceneFactory:
         config's representative scenario: the first value of every scenario distribution).
     """
 
+    STATICS_SCENE_ENTRIES = 256
+
     def __init__(self, cfg: EnvConfig) -> None:
         self.cfg = cfg
         self.models: OrderedDict[str, Model] = OrderedDict()  # compiled statics scenes by equilibrium key
+        self.statics_scenes: OrderedDict[str, SceneConfig] = OrderedDict()  # validated, by statics mapping
         raw = scene_dict(cfg.scene)
         if raw.get("kind", "dart_installation") != "dart_installation" or "installation" not in raw:
             raise ConfigError("scene", cfg.scene, "a dart_installation scene")
@@ -124,14 +141,18 @@ class SceneFactory:
         if not (comp.wire and comp.vertical_chain and comp.mooring_line):
             raise ConfigError("scene", cfg.scene, "a scene with wire, vertical chain and mooring line")
 
-    @staticmethod
-    def scene_overrides(scenario: dict[str, Any]) -> dict[str, Any]:
-        """Scene ``--set`` overrides of a scenario."""
+    def scene_overrides(self, scenario: dict[str, Any]) -> dict[str, Any]:
+        """Scene ``--set`` overrides of a scenario, with the geometry change its controls can reach."""
         depth = float(scenario["water_depth_m"])
+        spacing_m = float(scenario["vessel_spacing_over_depth"]) * depth
+        length_m = float(scenario["mooring_line_length_over_depth"]) * depth
+        widen_m, haul_m = self.control_reach_m(depth, spacing_m, length_m)
         return {
+            "discretization.fit_spacing_increase_m": widen_m,
+            "discretization.fit_line_shortening_m": haul_m,
             "water_depth_m": depth,
-            "vessel_spacing_m": float(scenario["vessel_spacing_over_depth"]) * depth,
-            "mooring_line_length_m": float(scenario["mooring_line_length_over_depth"]) * depth,
+            "vessel_spacing_m": spacing_m,
+            "mooring_line_length_m": length_m,
             "vertical_chain_length_m": float(scenario["vertical_chain_length_m"]),
             "drop_height_m": float(scenario["drop_height_m"]),
             "current_scale": float(scenario["current_scale"]),
@@ -143,6 +164,26 @@ class SceneFactory:
             "anchor_mass_scale": float(scenario["anchor_mass_scale"]),
         }
 
+    def control_reach_m(self, depth_m: float, spacing_m: float, line_length_m: float) -> tuple[float, float]:
+        """Widest spacing increase and longest haul-in [m] the controls can make before the release.
+
+        The horizon is the longer of AnchorRelease-v0's ``control.max_pre_release_s`` and AnchorPlan-v0's
+        ``plan.positioning_s``; the DP vessel accelerates at ``spacing_accel_max_m_s2`` up to
+        ``spacing_rate_max_m_s``; both are capped by the spacing and line-length limits. The fidelity fit
+        (:func:`moor_env.config.fit_fidelity`) resolves the lines for this worst case, because the resolution
+        is fixed when the episode's equilibrium is built.
+        """
+        ctl = self.cfg.control
+        horizon_s = max(ctl.max_pre_release_s, self.cfg.plan.positioning_s)
+        accel_s = ctl.spacing_rate_max_m_s / ctl.spacing_accel_max_m_s2
+        if horizon_s <= accel_s:
+            widen_m = 0.5 * ctl.spacing_accel_max_m_s2 * horizon_s**2
+        else:
+            widen_m = ctl.spacing_rate_max_m_s * (horizon_s - 0.5 * accel_s)
+        widen_m = min(widen_m, max(0.0, ctl.spacing_max_over_depth * depth_m - spacing_m))
+        haul_m = min(ctl.haul_rate_max_m_s * horizon_s, max(0.0, line_length_m - ctl.line_length_min_over_depth * depth_m))
+        return float(widen_m), float(haul_m)
+
     def scene_data(self, scenario: dict[str, Any]) -> dict[str, Any]:
         """Scene mapping of a scenario."""
         return apply_scene_overrides(self.base, self.scene_overrides(scenario))
@@ -153,6 +194,41 @@ class SceneFactory:
         if data["environment"]["current"]["scale"] == 0.0:
             data["environment"]["current"]["direction_deg"] = 0.0
         return data
+
+    def episode_scene(self, scenario: dict[str, Any]) -> tuple[SceneConfig, dict[str, Any], SceneConfig]:
+        """The scenario's validated scene, its statics mapping and that mapping's validated scene.
+
+        The statics scene is validated once per equilibrium (cached); the episode scene is it with the
+        scenario's ``environment``, ``installation`` and chain material validated on their own, which is what
+        :meth:`scene` gives at a fraction of the cost (a full validation re-reads the fidelity presets; tested
+        equal). Any validation error is reported by :meth:`scene`.
+
+        Raises
+        ------
+        ConfigError
+            Naming the scene key the scenario makes invalid.
+        """
+        data = self.scene_data(scenario)
+        statics_data = self.statics_data(scenario)
+        key = scene_key(statics_data, "")
+        statics = self.statics_scenes.get(key)
+        try:
+            if statics is None:
+                statics = scene_from_dict(statics_data)
+            chain = self.chain_material
+            scene = statics.model_copy(update={
+                "environment": EnvironmentConfig.model_validate(data["environment"]),
+                "installation": InstallationConfig.model_validate(data["installation"]),
+                "materials": {**statics.materials, chain: MaterialConfig.model_validate(data["materials"][chain])},
+            })
+            check_scene_consistency(scene)
+        except (ConfigError, ValidationError):
+            return self.scene(scenario), statics_data, statics  # raises the keyed error
+        self.statics_scenes[key] = statics
+        self.statics_scenes.move_to_end(key)
+        while len(self.statics_scenes) > self.STATICS_SCENE_ENTRIES:
+            self.statics_scenes.popitem(last=False)
+        return scene, statics_data, statics
 
     def scene(self, scenario: dict[str, Any]):
         """Validated scene of a scenario.
@@ -245,6 +321,29 @@ def draw_scenario(cfg: EnvConfig, rng: np.random.Generator, options: dict[str, A
     return scenario
 
 
+@jit
+def line_summary(node_pos, seg_i, seg_f, line_i, line, material):
+    """Over the active segments of ``line``: the lowest node z, the lowest z of nodes on segments of
+    ``material`` (inf if none) and the total unstretched length [m].
+
+    One pass in a kernel because the observation needs it every step (numpy masks over the segment table cost
+    more than the rest of the observation).
+    """
+    start = line_i[line, L.LI_SEG_START]
+    z_min = math.inf
+    z_mat = math.inf
+    length = 0.0
+    for s in range(start, start + line_i[line, L.LI_SEG_CAP]):
+        if seg_i[s, L.SI_ACTIVE] != 1 or seg_i[s, L.SI_LINE] != line:
+            continue
+        z = min(node_pos[seg_i[s, L.SI_A], 2], node_pos[seg_i[s, L.SI_B], 2])
+        z_min = min(z_min, z)
+        if seg_i[s, L.SI_MAT] == material:
+            z_mat = min(z_mat, z)
+        length += seg_f[s, L.SF_L0]
+    return z_min, z_mat, length
+
+
 class InstallationCore:
     """One episode slot: a simulator started from a cached equilibrium and the RL bookkeeping around it.
 
@@ -270,16 +369,18 @@ class InstallationCore:
         self.last_obs = np.zeros(len(OBS_NAMES), dtype=np.float32)
         self.pending: Advance | None = None
         self.done = True
+        self.saved_state = None  # state before a coarse pre-release advance (see fallback)
+        self.fallbacks = 0
         self.advancer = None  # the BatchAdvancer of run_advance, made on first use
 
     # --- episode start -----------------------------------------------------------------------------------------
-    def _model(self, scene, statics_data: dict[str, Any]) -> Model:
-        """Compiled model of ``scene``: the statics scene's model (cached) with the episode's sea state and chain
-        Cd_t (:func:`derive_model`), so that a new sea state costs no compile."""
+    def _model(self, scene: SceneConfig, statics_data: dict[str, Any], statics: SceneConfig) -> Model:
+        """Compiled model of ``scene``: the model of the statics scene ``statics`` (cached) with the episode's sea
+        state and chain Cd_t (:func:`derive_model`), so that a new sea state costs no compile."""
         key = scene_key(statics_data, self.cache.source_hash)
         base = self._models.get(key)
         if base is None:
-            base = compile_scene(scene_from_dict(json.loads(json.dumps(statics_data))))
+            base = compile_scene(statics)
             self._models[key] = base
             while len(self._models) > self.MODEL_CACHE_ENTRIES:
                 self._models.popitem(last=False)
@@ -296,9 +397,8 @@ class InstallationCore:
             If the scenario gives no valid scene or no equilibrium.
         """
         cfg = self.cfg
-        scene = self.factory.scene(scenario)
-        statics_data = self.factory.statics_data(scenario)
-        model = self._model(scene, statics_data)
+        scene, statics_data, statics = self.factory.episode_scene(scenario)
+        model = self._model(scene, statics_data, statics)
         state, origin = self.cache.state(statics_data)
         if state.node_pos.shape != model.node_pos0.shape or state.seg_i.shape != model.seg_i.shape:
             raise StaticsNotConverged("cached equilibrium does not match the compiled scene's topology")
@@ -313,6 +413,7 @@ class InstallationCore:
         self.ramp_s = cfg.control.warmup_s if cfg.control.warmup_s > 0 else 2.0 * self.tp
         self.lines = {name: info.index for name, info in model.lines.items()}
         self.vertical_chain_m = scene.installation.vertical_chain_length_m
+        self.fairlead_depth_m = scene.installation.fairlead_depth_m
         self.chain_material = scene.installation.chain_material
         fibre_index = model.material_names.index(scene.installation.fibre_material)
         self.fibre_mat = fibre_index
@@ -322,6 +423,8 @@ class InstallationCore:
         self.spacing_rate = 0.0
         self.payout_rate = 0.0
         self.steps = 0
+        self.fallbacks = 0  # pre-release advances repeated at the scene's step (see fallback)
+        self.saved_state = None
         self.released = False
         self.done = False
         self.status = "running"
@@ -334,7 +437,7 @@ class InstallationCore:
         self.t0 = 0.0
         if self.hs > 0.0 and cfg.control.warmup_s > 0.0:
             sim.set_vessel_motion(sim.state.t, cfg.control.warmup_s, np.zeros(2), ramp_s=self.ramp_s)
-            self.pending = Advance(sim.state.t + cfg.control.warmup_s, False, PHASE_WARMUP)
+            self.pending = self._pre_release(sim.state.t + cfg.control.warmup_s, PHASE_WARMUP)
         else:
             self.pending = None
         return self.pending
@@ -355,6 +458,39 @@ class InstallationCore:
         return obs, info
 
     # --- steps -------------------------------------------------------------------------------------------------
+    def _pre_release(self, t_end_s: float, phase: str) -> Advance:
+        """Advance to ``t_end_s`` before the release, in steps of about ``control.pre_release_dt_s``.
+
+        The span is split into n equal steps, n the smallest whole number that keeps them at or below the
+        configured step (never below the scene's step), so the advance ends exactly at ``t_end_s`` and the
+        release falls on the control grid. Only the implicit integrator takes the coarser step: the explicit
+        ones are bound by the lines' axial stability limit whether or not the anchor falls. Before a step
+        coarser than the scene's the state is saved for :meth:`fallback`.
+        """
+        sim = self.sim
+        target = sim.dt
+        if sim.integrator_code == INTEGRATOR_IMPLICIT_EULER and self.cfg.control.pre_release_dt_s is not None:
+            target = max(self.cfg.control.pre_release_dt_s, sim.dt)
+        adv = Advance(t_end_s, False, phase, _even_step(t_end_s - sim.state.t, target))
+        self.saved_state = sim.state.copy() if adv.dt_s > sim.dt else None
+        return adv
+
+    def fallback(self, adv: Advance, error: SimulationDiverged | None) -> Advance | None:
+        """The advance to repeat at the scene's step, from the saved state, if ``adv`` diverged with a coarser
+        pre-release step; else None.
+
+        A coarse pre-release step is an accuracy trade (``control.pre_release_dt_s``); it must never end an
+        episode that the scene's own step would have carried through, so a blow-up with it is retried once.
+        """
+        if error is None or self.saved_state is None or adv.dt_s <= self.sim.dt:
+            return None
+        self.sim.state = self.saved_state
+        self.saved_state = None
+        self.fallbacks += 1
+        self.pending = Advance(adv.t_end_s, adv.detect_touchdown, adv.phase,
+                               _even_step(adv.t_end_s - self.sim.state.t, self.sim.dt))
+        return self.pending
+
     @property
     def time_s(self) -> float:
         """Time since the first observation [s]."""
@@ -365,12 +501,14 @@ class InstallationCore:
         v = self.sim.vessel_mean_m
         return float(v[VESSEL_SECOND, 0] - v[VESSEL_INSTALLATION, 0])
 
+    def _mooring_line(self) -> tuple[float, float, float]:
+        """:func:`line_summary` of the mooring line with the fibre as the material."""
+        st = self.sim.state
+        return line_summary(st.node_pos, st.seg_i, st.seg_f, st.line_i, self.lines["mooring_line"], self.fibre_mat)
+
     def line_length_total_m(self) -> float:
         """Mooring line including the vertical chain [m] (unstretched)."""
-        st = self.sim.state
-        idx = self.lines["mooring_line"]
-        segs = (st.seg_i[:, L.SI_LINE] == idx) & (st.seg_i[:, L.SI_ACTIVE] == 1)
-        return float(np.sum(st.seg_f[segs, L.SF_L0])) + self.vertical_chain_m
+        return self._mooring_line()[2] + self.vertical_chain_m
 
     def begin_step(self, action: np.ndarray) -> Advance | None:
         """Apply an action; the integration it needs (None when the episode ends without one)."""
@@ -390,7 +528,7 @@ class InstallationCore:
             sim.release()
             self.released = True
             sim.set_vessel_motion(t, self.max_fall_s + 1.0, np.zeros(2), ramp_s=self.ramp_s)
-            self.pending = Advance(t + self.max_fall_s, True, PHASE_FALL)
+            self.pending = Advance(t + self.max_fall_s, True, PHASE_FALL, sim.dt)
             return self.pending
         dt = cfg.interval_s
         # DP vessel: commanded speed, acceleration-limited, kept inside the spacing limits
@@ -410,7 +548,7 @@ class InstallationCore:
         self.payout_rate = float(rate)
         sim.set_vessel_motion(t, dt, np.array([0.0, v]), ramp_s=self.ramp_s)
         sim.set_payout_rate("mooring_line", float(rate))
-        self.pending = Advance(t + dt, False, PHASE_CONTROL)
+        self.pending = self._pre_release(t + dt, PHASE_CONTROL)
         return self.pending
 
     def begin_hold(self, t_end_s: float) -> Advance | None:
@@ -425,7 +563,7 @@ class InstallationCore:
         self.spacing_rate = 0.0
         sim.set_vessel_motion(t, max(t_end_s - t, sim.dt), np.zeros(2), ramp_s=self.ramp_s)
         self.hold_start_s = t
-        self.pending = Advance(t_end_s, False, PHASE_HOLD)
+        self.pending = self._pre_release(t_end_s, PHASE_HOLD)
         return self.pending
 
     def finish_step(self, status: int | None, error: SimulationDiverged | None
@@ -524,66 +662,60 @@ class InstallationCore:
                           "chain_on_seabed_m": pile}
 
     # --- observation -------------------------------------------------------------------------------------------
-    def _line_nodes(self, line: str, material: int | None = None) -> np.ndarray:
-        st = self.sim.state
-        segs = (st.seg_i[:, L.SI_LINE] == self.lines[line]) & (st.seg_i[:, L.SI_ACTIVE] == 1)
-        if material is not None:
-            segs &= st.seg_i[:, L.SI_MAT] == material
-        return np.unique(np.concatenate([st.seg_i[segs, L.SI_A], st.seg_i[segs, L.SI_B]]))
-
     def _fibre_clearance_m(self) -> float:
-        nodes = self._line_nodes("mooring_line", self.fibre_mat)
-        if nodes.size == 0:
-            return math.inf
-        return float(self.sim.state.node_pos[nodes, 2].min() + self.depth)
+        return self._mooring_line()[1] + self.depth
 
     def raw_observation(self) -> np.ndarray:
-        """Observation in physical units (see :data:`OBS_SPEC`)."""
+        """Observation in physical units (see :data:`OBS_SPEC`).
+
+        Built from Python floats (``tolist``) rather than small numpy operations: it runs every step, and per-call
+        numpy overhead was most of its cost.
+        """
         sim = self.sim
         st = sim.state
         m = sim.model
         tensions = sim.top_tensions_n()
-        rn = m.release_node
-        b = st.body_state
-        e = b[L.BS_AXIS:L.BS_AXIS + 3]
-        w = b[L.BS_OMEGA:L.BS_OMEGA + 3]
-        axis_rate = float(np.linalg.norm(w - np.dot(w, e) * e))
+        px, py, pz, vx, vy, vz, ex, ey, ez, wx, wy, wz = st.body_state[L.BS_POS:L.BS_OMEGA + 3].tolist()
+        w_axial = wx * ex + wy * ey + wz * ez
+        axis_rate = math.sqrt((wx - w_axial * ex) ** 2 + (wy - w_axial * ey) ** 2 + (wz - w_axial * ez) ** 2)
         _, _, hz, _, _, hvz = track_state(sim.tracks, VESSEL_INSTALLATION, st.t, sim.env_f)
         cx, cy, _ = current_velocity(0.0, sim.env_f, m.current_profile)
-        tip, _ = sim.tip_state()
-        loop = self._line_nodes("mooring_line")
-        loop_bottom = float(st.node_pos[loop, 2].min() + self.depth) if loop.size else 0.0
-        fibre = self._fibre_clearance_m()
-        raw = np.array([
+        tip_z = pz + m.body_f[L.BF_S_TIP] * ez
+        loop_z, fibre_z, line_l0 = self._mooring_line()
+        rx, ry, rz = st.node_pos[m.release_node].tolist()
+        rvx, rvy, rvz = st.node_vel[m.release_node].tolist()
+        ref = self.release_ref
+        fibre = fibre_z + self.depth
+        loop_bottom = loop_z + self.depth
+        return np.array([
             self.time_s / self.cfg.control.max_pre_release_s,
             1.0 if self.released else 0.0,
             self.spacing_m(),
             self.spacing_rate,
-            self.line_length_total_m() / self.depth,
+            (line_l0 + self.vertical_chain_m) / self.depth,
             self.payout_rate,
-            st.node_pos[rn, 0] - self.release_ref[0],
-            st.node_pos[rn, 1] - self.release_ref[1],
-            st.node_pos[rn, 2] - self.release_ref[2],
-            st.node_vel[rn, 0],
-            st.node_vel[rn, 1],
-            st.node_vel[rn, 2],
+            rx - ref[0],
+            ry - ref[1],
+            rz - ref[2],
+            rvx,
+            rvy,
+            rvz,
             sim.tilt_deg(),
             math.degrees(axis_rate),
             tensions.get("wire", 0.0) / 1e6,
             tensions.get("mooring_line", 0.0) / 1e6,
-            hz + m.scene.installation.fairlead_depth_m,
+            hz + self.fairlead_depth_m,
             hvz,
             cx,
             cy,
             self.depth,
-            tip[2] + self.depth,
-            loop_bottom,
+            tip_z + self.depth,
+            loop_bottom if math.isfinite(loop_bottom) else 0.0,
             fibre if math.isfinite(fibre) else 1000.0,
             self.hs,
             self.tp,
             self.vertical_chain_m,
         ], dtype=np.float64)
-        return raw
 
     def observe(self) -> np.ndarray:
         """Normalised float32 observation, clipped to +-OBS_CLIP; the last finite one if the state is not."""
@@ -626,6 +758,11 @@ class InstallationCore:
                 "fibre_material": m.material_names[self.fibre_mat], "hs_m": self.hs, "target_xy": self.target_xy}
 
 
+def _even_step(span_s: float, max_step_s: float) -> float:
+    """``span_s`` / n for the smallest whole n that keeps the step at or below ``max_step_s``."""
+    return span_s / max(1, math.ceil(span_s / max_step_s - 1e-9))
+
+
 def run_advance(core: InstallationCore, adv: Advance, chunk_s: float | None = None,
                 on_chunk=None) -> tuple[int | None, SimulationDiverged | None]:
     """Integrate one core's simulator as ``adv`` asks (optionally in chunks with a callback, e.g. frames).
@@ -639,11 +776,14 @@ def run_advance(core: InstallationCore, adv: Advance, chunk_s: float | None = No
     if core.advancer is None:
         core.advancer = BatchAdvancer()
     sim = core.sim
-    chunk_s = None if chunk_s is None or on_chunk is None else max(chunk_s, sim.dt)
+    chunk_s = None if chunk_s is None or on_chunk is None else max(chunk_s, adv.dt_s)
     status = L.STATUS_TIME_LIMIT
-    while sim.state.t < adv.t_end_s - 0.5 * sim.dt:
+    while sim.state.t < adv.t_end_s - 0.5 * adv.dt_s:
         t_stop = adv.t_end_s if chunk_s is None else min(sim.state.t + chunk_s, adv.t_end_s)
-        status, error = core.advancer.run({0: (sim, t_stop, adv.detect_touchdown)})[0]
+        status, error = core.advancer.run({0: (sim, t_stop, adv.detect_touchdown, adv.dt_s)})[0]
+        retry = core.fallback(adv, error)
+        if retry is not None:
+            return run_advance(core, retry, chunk_s, on_chunk)
         if error is not None:
             return None, error
         if chunk_s is not None:

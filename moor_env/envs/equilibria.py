@@ -13,7 +13,8 @@ that can change the static solution:
   nominal Cd_t).
 
 The key also holds a hash of the physics sources (``moor_env/physics/*.py``, ``compile.py``,
-``simulation.py``, ``config.py``), so an edited solver never returns stale states. The state stored is the
+``simulation.py``, ``config.py``) and of ``configs/fidelity.yaml`` (the scene names a preset, whose resolution
+decides the topology), so an edited solver or preset never returns stale states. The state stored is the
 solver's output bit for bit, so a cached and a fresh start give identical episodes.
 
 ``python -m moor_env.envs.precompute --config anchor-release --jobs 2`` solves every combination of a config's
@@ -36,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from moor_env.config import scene_from_dict
+from moor_env.config import FIDELITY_PATH, scene_from_dict
 from moor_env.envs.config import SCENARIO_RANGES, EnvConfig, StaticsCacheConfig, _values, load_env_config
 from moor_env.simulation import SimState, solve_statics
 
@@ -52,6 +53,7 @@ def physics_source_hash() -> str:
     digest = hashlib.sha256()
     files = sorted((_PACKAGE / "physics").glob("*.py")) + [_PACKAGE / n for n in ("compile.py", "simulation.py",
                                                                                   "config.py")]
+    files.append(FIDELITY_PATH)  # a scene names its preset; the resolution it stands for is in this file
     for path in files:
         digest.update(path.name.encode())
         digest.update(path.read_bytes())

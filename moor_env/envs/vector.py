@@ -2,10 +2,11 @@
 
 ``gym.make_vec("moor_env/AnchorRelease-v0", num_envs=8)`` (or ``vectorization_mode="vector_entry_point"``)
 returns :class:`AnchorReleaseVectorEnv`: ``num_envs`` episode slots, each an
-:class:`~moor_env.envs.core.InstallationCore` (the single env's RL logic), advanced together by one numba call
-per step (:mod:`moor_env.envs.batch`, a ``prange`` over scenes). Row i equals ``AnchorReleaseEnv`` reset with
-seed ``seed + i`` and given the same actions, bit for bit (tested), including next-step autoreset as
-Gymnasium's ``SyncVectorEnv`` does it. Equilibria are shared between the slots (one cache).
+:class:`~moor_env.envs.core.InstallationCore` (the single env's RL logic), advanced together by the GIL-free
+batch kernel (:mod:`moor_env.envs.batch`: up to 8 scenes per numba call, groups of scenes on ``num_threads``
+threads). Row i equals ``AnchorReleaseEnv`` reset with seed ``seed + i`` and given the same actions, bit for
+bit (tested), including next-step autoreset as Gymnasium's ``SyncVectorEnv`` does it. Equilibria are shared
+between the slots (one cache).
 """
 
 from __future__ import annotations
@@ -27,6 +28,35 @@ from moor_env.envs.core import ACTION_NAMES, OBS_CLIP, OBS_NAMES, InstallationCo
 from moor_env.envs.equilibria import EquilibriumCache
 from moor_env.errors import ConfigError
 from moor_env.physics import layout as L
+
+
+def merge_infos(infos: list[tuple[int, dict[str, Any]]], num_envs: int) -> dict[str, Any]:
+    """Gymnasium's vector ``info`` layout (``VectorEnv._add_info`` applied env by env, same keys, dtypes and
+    ``_key`` masks; nested dicts recursively) built key by key: one array per key per step instead of a
+    lookup-and-assign per env and key, which cost more than the rest of the batched env's bookkeeping.
+    """
+    keys: dict[str, None] = {}
+    for _, info in infos:
+        keys.update(dict.fromkeys(info))
+    out: dict[str, Any] = {}
+    for key in keys:
+        present = [(i, info[key]) for i, info in infos if key in info]
+        first = present[0][1]
+        if isinstance(first, dict):
+            array = merge_infos(present, num_envs)
+        else:
+            if type(first) in (int, float, bool) or issubclass(type(first), np.number):
+                array = np.zeros(num_envs, dtype=type(first))
+            elif isinstance(first, np.ndarray):
+                array = np.zeros((num_envs, *first.shape), dtype=first.dtype)
+            else:
+                array = np.full(num_envs, fill_value=None, dtype=object)
+            for i, value in present:
+                array[i] = value
+        mask = np.zeros(num_envs, dtype=np.bool_)
+        mask[[i for i, _ in present]] = True
+        out[key], out[f"_{key}"] = array, mask
+    return out
 
 
 class AnchorReleaseVectorEnv(VectorEnv):
@@ -81,9 +111,13 @@ class AnchorReleaseVectorEnv(VectorEnv):
 
     # --- integration ---------------------------------------------------------------------------------------------
     def _run(self, advances: dict[int, Any]) -> dict[int, tuple[int | None, Any]]:
-        jobs = {i: (self.cores[i].sim, adv.t_end_s, adv.detect_touchdown) for i, adv in advances.items()
-                if adv is not None and self.cores[i].sim.state.t < adv.t_end_s - 0.5 * self.cores[i].sim.dt}
+        jobs = {i: (self.cores[i].sim, adv.t_end_s, adv.detect_touchdown, adv.dt_s) for i, adv in advances.items()
+                if adv is not None and self.cores[i].sim.state.t < adv.t_end_s - 0.5 * adv.dt_s}
         results = self.batch.run(jobs)
+        # slots whose coarse pre-release step diverged go again at the scene's step, as run_advance does
+        retries = {i: self.cores[i].fallback(advances[i], results[i][1]) for i in results}
+        if any(adv is not None for adv in retries.values()):
+            results.update(self._run({i: adv for i, adv in retries.items() if adv is not None}))
         # an advance with nothing left to integrate (never in practice) reports the time limit, as run_advance
         return {i: results.get(i, (L.STATUS_TIME_LIMIT, None)) if advances[i] is not None else (None, None)
                 for i in advances}
@@ -114,13 +148,13 @@ class AnchorReleaseVectorEnv(VectorEnv):
         advances = {i: start_episode(self.cores[i], self._rng(i, seeds[i]), options or None)
                     for i in range(n) if mask[i]}
         results = self._run(advances)
-        infos: dict[str, Any] = {}
+        infos = []
         for i in advances:
             self._obs[i], info = self.cores[i].finish_start(results[i][1])
             self._autoreset[i] = False
             self._started[i] = True
-            infos = self._add_info(infos, info, i)
-        return self._obs.copy(), infos
+            infos.append((i, info))
+        return self._obs.copy(), merge_infos(infos, n)
 
     def step(self, actions):
         """Step every slot; a slot that ended on the previous step is reset instead (next-step autoreset)."""
@@ -138,16 +172,16 @@ class AnchorReleaseVectorEnv(VectorEnv):
         rewards = np.zeros(self.num_envs, dtype=np.float64)
         terminated = np.zeros(self.num_envs, dtype=np.bool_)
         truncated = np.zeros(self.num_envs, dtype=np.bool_)
-        infos: dict[str, Any] = {}
+        infos = []
         for i, core in enumerate(self.cores):
             status, error = results[i]
             if resetting[i]:
                 self._obs[i], info = core.finish_start(error)
             else:
                 self._obs[i], rewards[i], terminated[i], truncated[i], info = core.finish_step(status, error)
-            infos = self._add_info(infos, info, i)
+            infos.append((i, info))
         self._autoreset = terminated | truncated
-        return self._obs.copy(), rewards, terminated, truncated, infos
+        return self._obs.copy(), rewards, terminated, truncated, merge_infos(infos, self.num_envs)
 
     def render(self):
         """One frame per slot (``render_mode="rgb_array"``)."""

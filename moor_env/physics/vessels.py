@@ -76,29 +76,54 @@ def sample_tracks(base_xyz: np.ndarray, spacing_velocity_m_s: np.ndarray, t0_s: 
         Position [m] and velocity [m/s] at ``t0_s + k * sample_dt_s``.
     """
     n_samples = int(math.ceil(duration_s / sample_dt_s)) + 2
-    times = t0_s + sample_dt_s * np.arange(n_samples)
-    n_vessels = base_xyz.shape[0]
-    tracks = np.zeros((n_vessels, n_samples, 6))
-    for v in range(n_vessels):
-        tracks[v, :, 0] = base_xyz[v, 0] + spacing_velocity_m_s[v] * (times - t0_s)
-        tracks[v, :, 1] = base_xyz[v, 1]
-        tracks[v, :, 2] = base_xyz[v, 2]
-        tracks[v, :, 3] = spacing_velocity_m_s[v]
+    tracks = np.empty((base_xyz.shape[0], n_samples, 6))
+    omega = amplitude = wavenumber = phase = np.zeros(0)
     if sea is not None and np.any(sea["amplitude"] > 0):
         omega = sea["omega"]
-        k = omega**2 / gravity
         transfer = motion_transfer(omega, sea["natural_period_s"], sea["damping_ratio"])
-        gain = np.abs(transfer)
-        lag = np.angle(transfer)
-        for v in range(n_vessels):
-            arg = omega[None, :] * times[:, None] - k[None, :] * base_xyz[v, 0] + sea["phase"][None, :] + lag[None, :]
-            amp = (sea["amplitude"] * gain)[None, :]
-            # elevation eta = a cos(arg); deep-water horizontal orbital displacement = a sin(arg)
-            tracks[v, :, 2] += np.sum(amp * np.cos(arg), axis=1)
-            tracks[v, :, 5] += np.sum(-amp * omega[None, :] * np.sin(arg), axis=1)
-            tracks[v, :, 0] += np.sum(amp * np.sin(arg), axis=1)
-            tracks[v, :, 3] += np.sum(amp * omega[None, :] * np.cos(arg), axis=1)
+        amplitude = sea["amplitude"] * np.abs(transfer)
+        wavenumber = omega**2 / gravity
+        phase = sea["phase"] + np.angle(transfer)
+    fill_tracks(tracks, t0_s, sample_dt_s, np.ascontiguousarray(base_xyz, dtype=np.float64),
+                np.ascontiguousarray(spacing_velocity_m_s, dtype=np.float64), amplitude, omega, wavenumber, phase)
     return tracks
+
+
+@jit
+def fill_tracks(tracks, t0, sample_dt, base_xyz, speed, amplitude, omega, wavenumber, phase):
+    """Write the tracks: each vessel's mean position moving at ``speed`` along x, plus its wave-following heave
+    and surge (position and velocity).
+
+    Component j moves with arg = omega_j t - k_j x_v + phase_j (``amplitude`` and ``phase`` include the motion
+    transfer; x_v is the mean x at ``t0``): elevation eta = a cos(arg), deep-water horizontal orbital
+    displacement a sin(arg). The samples are uniform in time, so (cos, sin) of arg advance from sample to sample
+    by one rotation (angle addition) instead of two trigonometric calls per sample and component. A kernel: the
+    env samples a window every step, where numpy's per-call cost dominated.
+    """
+    n = tracks.shape[1]
+    for v in range(tracks.shape[0]):
+        for i in range(n):
+            t = t0 + sample_dt * i
+            tracks[v, i, 0] = base_xyz[v, 0] + speed[v] * (t - t0)
+            tracks[v, i, 1] = base_xyz[v, 1]
+            tracks[v, i, 2] = base_xyz[v, 2]
+            tracks[v, i, 3] = speed[v]
+            tracks[v, i, 4] = 0.0
+            tracks[v, i, 5] = 0.0
+        for j in range(omega.shape[0]):
+            arg = omega[j] * t0 - wavenumber[j] * base_xyz[v, 0] + phase[j]
+            c = math.cos(arg)
+            s = math.sin(arg)
+            rc = math.cos(omega[j] * sample_dt)
+            rs = math.sin(omega[j] * sample_dt)
+            a = amplitude[j]
+            aw = a * omega[j]
+            for i in range(n):
+                tracks[v, i, 2] += a * c
+                tracks[v, i, 5] -= aw * s
+                tracks[v, i, 0] += a * s
+                tracks[v, i, 3] += aw * c
+                c, s = c * rc - s * rs, s * rc + c * rs
 
 
 @jit

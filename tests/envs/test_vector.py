@@ -30,14 +30,19 @@ def test_make_vec_modes(tiny, mode):
     env.close()
 
 
-@pytest.mark.parametrize(("n", "threads"), [(3, 1), (3, 2), (10, 2)])  # 10 > BATCH_WIDTH: several kernel calls
-def test_batched_rows_equal_single_envs(tiny, n, threads):
+# the coarse pre-release step (implicit integrator only) with its fallback path is covered by the last case
+COARSE = {"fidelity.discretization.integrator": "implicit_euler", "control.pre_release_dt_s": 0.13}
+
+
+@pytest.mark.parametrize(("n", "threads", "extra"), [(3, 1, {}), (3, 2, {}), (10, 2, {}), (3, 2, COARSE)])
+def test_batched_rows_equal_single_envs(tiny, n, threads, extra):  # 10 > BATCH_WIDTH: several kernel calls
     steps = 40
+    overrides = {**tiny, **extra}
     batched = gym.make_vec("moor_env/AnchorRelease-v0", num_envs=n, vectorization_mode="vector_entry_point",
-                           config="tiny", overrides=tiny, num_threads=threads)
+                           config="tiny", overrides=overrides, num_threads=threads)
     assert isinstance(batched, AnchorReleaseVectorEnv)
     sync = gym.make_vec("moor_env/AnchorRelease-v0", num_envs=n, vectorization_mode="sync", config="tiny",
-                        overrides=tiny)
+                        overrides=overrides)
     obs_b, info_b = batched.reset(seed=21)
     obs_s, info_s = sync.reset(seed=21)
     assert np.array_equal(obs_b, obs_s)
@@ -84,3 +89,50 @@ def test_derived_model_equals_compiled(tiny):
             assert np.array_equal(getattr(derived, name), arr), name
         for name in ("body_f", "body_q", "current_profile", "node_pos0", "body_state0", "vessel_base_m"):
             assert np.array_equal(getattr(derived, name), getattr(fresh, name)), name
+
+
+def test_merge_infos_equals_gymnasium_add_info(tiny):
+    """The batched env's one-pass info merge against Gymnasium's env-by-env ``_add_info`` on real step, touchdown
+    and reset infos (keys present in some envs only, nested dicts, strings, bools, floats)."""
+    from moor_env.envs.vector import merge_infos
+
+    env = gym.make("moor_env/AnchorRelease-v0", config="tiny", overrides=tiny)
+    infos = [env.reset(seed=0)[1]]
+    for a in ([0.0, 0.0, -1.0], [0.5, 0.5, 1.0]):  # a control step, then release: touchdown info
+        infos.append(env.step(np.array(a, np.float32))[4])
+    infos.append(env.reset(seed=1)[1])
+    vector = AnchorReleaseVectorEnv(num_envs=6, config="tiny", overrides=tiny)
+    items = list(zip([0, 2, 3, 5], infos, strict=True))
+    expected: dict = {}
+    for i, info in items:
+        expected = vector._add_info(expected, info, i)
+    merged = merge_infos(items, 6)
+
+    def check(a, b):
+        assert list(a) == list(b)
+        for key in a:
+            if isinstance(a[key], dict):
+                check(a[key], b[key])
+            else:
+                assert a[key].dtype == b[key].dtype and a[key].shape == b[key].shape, key
+                assert all(x == y for x, y in zip(a[key].tolist(), b[key].tolist(), strict=True)), key
+
+    check(merged, expected)
+
+
+def test_batched_fallback_matches_single_env(tiny):
+    """A coarse pre-release advance that blows up is repeated at the scene's step in the batched env as in the
+    single env (here it blows up again: a strain limit below the hanging chain's static strain)."""
+    overrides = {**tiny, **COARSE, "scene_overrides.simulation.strain_limit": 1e-4}
+    batched = AnchorReleaseVectorEnv(num_envs=2, config="tiny", overrides=overrides)
+    sync = gym.make_vec("moor_env/AnchorRelease-v0", num_envs=2, vectorization_mode="sync", config="tiny",
+                        overrides=overrides)
+    batched.reset(seed=3, options={"sea_state_hs_m": 0.0})
+    sync.reset(seed=3, options={"sea_state_hs_m": 0.0})
+    act = np.array([[0.0, 0.0, -1.0]] * 2, np.float32)
+    out_b, out_s = batched.step(act), sync.step(act)
+    assert np.all(out_b[2]) and np.array_equal(out_b[1], out_s[1]) and np.array_equal(out_b[0], out_s[0])
+    assert list(out_b[4]["sim_status"]) == list(out_s[4]["sim_status"])
+    assert all(s.startswith("diverged") for s in out_b[4]["sim_status"])
+    assert [core.fallbacks for core in batched.cores] == [1, 1]
+    assert [env.unwrapped.core.fallbacks for env in sync.envs] == [1, 1]

@@ -1,0 +1,455 @@
+"""Evaluate policies (trained runs and baselines) on a fixed scenario set.
+
+Python::
+
+    from agents.evaluate import evaluate_policy, load_run, summarize, markdown_table
+    from agents.baselines import make_baseline
+    from agents.scenarios import held_out_scenarios
+
+    scenarios = held_out_scenarios(12)
+    crew = evaluate_policy(make_baseline("crew", "moor_env/AnchorPlan-v0"), scenarios)
+    run = load_run("runs/plan-sac/seed-0")          # a RunPolicy: the SB3 model, its normalisation, its env
+    trained = evaluate_policy(run, scenarios, env_id=run.env_id, env_config=run.env_config)
+    print(markdown_table([trained, crew]))
+
+Command line::
+
+    python -m agents.evaluate runs/plan-sac crew random optimiser [--scenarios FILE] [--n-scenarios 24]
+
+A result (``evaluate_policy``) is a dict: ``policy``, ``env_id``, ``episodes`` (one record per scenario:
+``touchdown_speed_m_s``, ``tilt_deg``, ``reward``, ``success``, ``limits_exceeded``, ``sim_status`` ...) and
+``summary`` (:func:`summarize`). Several results of one policy trained with different seeds combine with
+:func:`combine_seeds` (t-interval over the seeds' means).
+
+**Success** (:func:`success_of`): touchdown with tilt below ``SUCCESS_TILT_DEG`` (2 deg, the Gjoa result; the DPA
+criterion is 5 deg) and speed at or above the env config's ``reward.required_speed_m_s`` (24 m/s), and no limit
+exceeded: no line above its MBL, the release unit's rating not exceeded, no fibre on the seabed (the
+``tension``, ``release_unit`` and ``fibre_seabed`` reward terms of the episode are all zero).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import multiprocessing as mp
+import sys
+import textwrap
+import time
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from tqdm import tqdm
+
+import moor_env  # noqa: F401 - registers the envs
+from agents.baselines import BASELINES, PLAN_ENV, RELEASE_ENV, make_baseline
+from agents.io import write_json_atomic, write_text_atomic
+from agents.policy import EpisodeContext, Policy
+from agents.scenarios import DEFAULT_COUNT, held_out_scenarios, load_scenarios
+from moor_env.envs.config import EnvConfig, load_env_config
+from moor_env.errors import ConfigError, StaticsNotConverged
+
+SUCCESS_TILT_DEG = 2.0
+LIMIT_TERMS = ("tension", "release_unit", "fibre_seabed")
+CONFIDENCE = 0.95
+BOOTSTRAP_SAMPLES = 2000
+ENV_ALIASES = {"plan": PLAN_ENV, "release": RELEASE_ENV}
+
+
+# --- episodes ----------------------------------------------------------------------------------------------------
+def success_of(touchdown: dict[str, Any] | None, terms: dict[str, float], cfg: EnvConfig) -> bool:
+    """Success of one episode from its touchdown record and its summed reward terms (module docstring)."""
+    if not touchdown:
+        return False
+    limits_ok = all(terms.get(k, 0.0) == 0.0 for k in LIMIT_TERMS)
+    return bool(touchdown["tilt_deg"] < SUCCESS_TILT_DEG
+                and touchdown["speed_m_s"] >= cfg.reward.required_speed_m_s and limits_ok)
+
+
+def episode_success(info: dict[str, Any], cfg: EnvConfig) -> bool:
+    """Success of a one-step episode (``AnchorPlan-v0``, whose final info sums the reward terms)."""
+    return success_of(info.get("touchdown"), info["reward_terms"], cfg)
+
+
+def run_episode(env: gym.Env, policy: Policy, scenario: dict[str, Any], env_id: str, cfg: EnvConfig) -> dict:
+    """Run ``policy`` on one scenario to the episode's end; returns the episode record."""
+    t0 = time.perf_counter()
+    record: dict[str, Any] = {"scenario": scenario["id"], "seed": scenario["seed"]}
+    try:
+        obs, info = env.reset(seed=scenario["seed"], options=scenario["options"])
+    except (ConfigError, StaticsNotConverged) as exc:
+        return {**record, **_no_touchdown(f"reset failed: {exc}"), "wall_s": time.perf_counter() - t0}
+    policy.begin_episode(EpisodeContext(env_id, cfg, scenario["options"], scenario["seed"], obs, info))
+    terms: dict[str, float] = {}
+    total, steps, done = 0.0, 0, False
+    while not done:
+        obs, reward, terminated, truncated, info = env.step(policy.act(obs, info))
+        total += float(reward)
+        steps += 1
+        for k, v in info["reward_terms"].items():
+            terms[k] = terms.get(k, 0.0) + float(v)
+        done = terminated or truncated
+    td = info.get("touchdown")
+    record.update({
+        "sim_status": info["sim_status"],
+        "touchdown": bool(td),
+        "touchdown_speed_m_s": float(td["speed_m_s"]) if td else math.nan,
+        "tilt_deg": float(td["tilt_deg"]) if td else math.nan,
+        "offset_m": float(td["offset_m"]) if td else math.nan,
+        "reward": total,
+        "reward_terms": terms,
+        "limits_exceeded": [k for k in LIMIT_TERMS if terms.get(k, 0.0) != 0.0],
+        "success": success_of(td, terms, cfg),
+        "steps": steps,
+        "release_s": _release_time(info),
+        "wall_s": time.perf_counter() - t0,
+    })
+    return record
+
+
+def _release_time(info: dict[str, Any]) -> float:
+    plan = info.get("plan")
+    if plan is not None:
+        return math.nan if plan["release_s"] is None else float(plan["release_s"])
+    return float(info.get("t_s", math.nan))
+
+
+def _no_touchdown(status: str) -> dict[str, Any]:
+    return {"sim_status": status, "touchdown": False, "touchdown_speed_m_s": math.nan, "tilt_deg": math.nan,
+            "offset_m": math.nan, "reward": math.nan, "reward_terms": {}, "limits_exceeded": [],
+            "success": False, "steps": 0, "release_s": math.nan}
+
+
+# --- evaluation (optionally in worker processes) --------------------------------------------------------------------
+_WORKER: dict[str, Any] = {}
+
+
+def _worker_init(policy: Policy, env_id: str, cfg: EnvConfig) -> None:
+    try:
+        import torch  # noqa: PLC0415
+
+        torch.set_num_threads(1)
+    except ImportError:  # pragma: no cover - torch comes with the rl extra
+        pass
+    _WORKER.update(policy=policy, env_id=env_id, cfg=cfg, env=gym.make(env_id, config=cfg))
+
+
+def _worker_run(scenario: dict[str, Any]) -> dict[str, Any]:
+    w = _WORKER
+    return run_episode(w["env"], w["policy"], scenario, w["env_id"], w["cfg"])
+
+
+def evaluate_policy(policy: Policy, scenarios: list[dict[str, Any]], env_id: str = PLAN_ENV,
+                    env_config: str | dict | EnvConfig = "anchor-release", n_jobs: int = 1,
+                    progress: bool = True, name: str | None = None) -> dict[str, Any]:
+    """Run ``policy`` once on every scenario; returns ``{policy, env_id, episodes, summary, wall_s}``.
+
+    Parameters
+    ----------
+    policy : Policy
+        A baseline (:func:`agents.baselines.make_baseline`) or a trained run (:func:`load_run`).
+    scenarios : list of dict
+        ``{id, seed, options}`` mappings (:func:`agents.scenarios.held_out_scenarios`).
+    env_id, env_config :
+        The env and its config (a trained run's own: ``run.env_id``, ``run.env_config``).
+    n_jobs : int
+        Worker processes (forked; each builds its own env). 1 runs in this process.
+    progress : bool
+        Show a tqdm bar over the scenarios.
+    name : str, optional
+        Label in tables and plots (default ``policy.name``).
+    """
+    cfg = env_config if isinstance(env_config, EnvConfig) else load_env_config(env_config)
+    label = name or policy.name
+    t0 = time.perf_counter()
+    bar = tqdm(total=len(scenarios), desc=f"evaluate {label}", disable=not progress, leave=False)
+    if n_jobs <= 1 or len(scenarios) == 1:
+        _worker_init(policy, env_id, cfg)
+        episodes = []
+        for sc in scenarios:
+            episodes.append(_worker_run(sc))
+            bar.update()
+        _WORKER.clear()
+    else:
+        ctx = mp.get_context("fork")
+        with ctx.Pool(min(n_jobs, len(scenarios)), _worker_init, (policy, env_id, cfg)) as pool:
+            episodes = []
+            for rec in pool.imap(_worker_run, scenarios):
+                episodes.append(rec)
+                bar.update()
+    bar.close()
+    return {"policy": label, "env_id": env_id, "episodes": episodes, "summary": summarize(episodes),
+            "wall_s": time.perf_counter() - t0}
+
+
+# --- statistics ----------------------------------------------------------------------------------------------------
+def bootstrap_ci(values: np.ndarray, seed: int = 0, samples: int = BOOTSTRAP_SAMPLES) -> tuple[float, float]:
+    """Percentile bootstrap 95 % interval of the mean (over scenarios); NaNs dropped."""
+    v = np.asarray(values, dtype=np.float64)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return (math.nan, math.nan)
+    rng = np.random.default_rng(seed)
+    means = v[rng.integers(0, v.size, (samples, v.size))].mean(axis=1)
+    alpha = (1.0 - CONFIDENCE) / 2.0
+    return (float(np.quantile(means, alpha)), float(np.quantile(means, 1.0 - alpha)))
+
+
+def t_interval(values: np.ndarray) -> tuple[float, float]:
+    """Student-t 95 % interval of the mean (over training seeds); a single value gives (v, v)."""
+    from scipy import stats  # noqa: PLC0415
+
+    v = np.asarray(values, dtype=np.float64)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return (math.nan, math.nan)
+    if v.size == 1:
+        return (float(v[0]), float(v[0]))
+    half = stats.t.ppf(0.5 + CONFIDENCE / 2.0, v.size - 1) * v.std(ddof=1) / math.sqrt(v.size)
+    return (float(v.mean() - half), float(v.mean() + half))
+
+
+def _stats(values: np.ndarray) -> dict[str, float]:
+    v = np.asarray(values, dtype=np.float64)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return {"mean": math.nan, "std": math.nan, "p10": math.nan, "p90": math.nan}
+    return {"mean": float(v.mean()), "std": float(v.std(ddof=1)) if v.size > 1 else 0.0,
+            "p10": float(np.quantile(v, 0.1)), "p90": float(np.quantile(v, 0.9))}
+
+
+def summarize(episodes: list[dict[str, Any]]) -> dict[str, Any]:
+    """Success rate, speed, tilt and reward statistics with bootstrap 95 % intervals over the scenarios."""
+    col = {k: np.array([e[k] for e in episodes], dtype=np.float64)
+           for k in ("success", "touchdown_speed_m_s", "tilt_deg", "reward")}
+    limits: dict[str, int] = {}
+    for e in episodes:
+        for k in e["limits_exceeded"]:
+            limits[k] = limits.get(k, 0) + 1
+    return {
+        "episodes": len(episodes),
+        "touchdowns": int(sum(e["touchdown"] for e in episodes)),
+        "success_rate": float(col["success"].mean()),
+        "success_ci": bootstrap_ci(col["success"]),
+        "speed_m_s": _stats(col["touchdown_speed_m_s"]),
+        "tilt_deg": _stats(col["tilt_deg"]),
+        "reward": {**_stats(col["reward"]), "ci": bootstrap_ci(col["reward"])},
+        "limits_exceeded": limits,
+    }
+
+
+def combine_seeds(results: list[dict[str, Any]], name: str | None = None) -> dict[str, Any]:
+    """One policy trained with several seeds: pooled episodes, and t-intervals over the seeds' means."""
+    if not results:
+        raise ValueError("combine_seeds needs at least one result")
+    episodes = [e for r in results for e in r["episodes"]]
+    summary = summarize(episodes)
+    per_seed = {k: [r["summary"][k] if k == "success_rate" else r["summary"][k]["mean"] for r in results]
+                for k in ("success_rate", "speed_m_s", "tilt_deg", "reward")}
+    summary["seeds"] = len(results)
+    summary["per_seed"] = per_seed
+    summary["success_ci"] = t_interval(per_seed["success_rate"]) if len(results) > 1 else summary["success_ci"]
+    summary["reward"]["ci"] = t_interval(per_seed["reward"]) if len(results) > 1 else summary["reward"]["ci"]
+    return {"policy": name or results[0]["policy"], "env_id": results[0]["env_id"], "episodes": episodes,
+            "summary": summary, "wall_s": float(sum(r["wall_s"] for r in results)),
+            "seed_results": [{"policy": r["policy"], "summary": r["summary"]} for r in results]}
+
+
+# --- tables and plots -------------------------------------------------------------------------------------------------
+def _fmt_ci(ci: tuple[float, float], digits: int) -> str:
+    return f"[{ci[0]:.{digits}f}, {ci[1]:.{digits}f}]"
+
+
+def markdown_table(results: list[dict[str, Any]]) -> str:
+    """One row per result: success rate with its 95 % interval, speed, tilt, reward, limits, cost."""
+    head = ("| policy | env | episodes (seeds) | success [95 % CI] | speed m/s mean ± sd | tilt deg mean ± sd (p90) "
+            "| reward mean [95 % CI] | limits exceeded | wall s |\n|---|---|---|---|---|---|---|---|---|")
+    rows = [head]
+    for r in results:
+        s = r["summary"]
+        limits = ", ".join(f"{k} {v}" for k, v in sorted(s["limits_exceeded"].items())) or "none"
+        rows.append(
+            f"| {r['policy']} | {r['env_id'].split('/')[-1]} | {s['episodes']} ({s.get('seeds', 1)}) "
+            f"| {100 * s['success_rate']:.0f} % {_fmt_ci(tuple(100 * x for x in s['success_ci']), 0)} "
+            f"| {s['speed_m_s']['mean']:.2f} ± {s['speed_m_s']['std']:.2f} "
+            f"| {s['tilt_deg']['mean']:.2f} ± {s['tilt_deg']['std']:.2f} ({s['tilt_deg']['p90']:.2f}) "
+            f"| {s['reward']['mean']:.3f} {_fmt_ci(s['reward']['ci'], 3)} | {limits} | {r['wall_s']:.0f} |")
+    return "\n".join(rows) + "\n"
+
+
+def plot_distributions(results: list[dict[str, Any]], path: str | Path, required_speed_m_s: float = 24.0) -> Path:
+    """Touchdown speed and tilt per policy (box plots over the scenarios, points on top) with the thresholds."""
+    import matplotlib  # noqa: PLC0415
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    fig, axes = plt.subplots(1, 2, figsize=(max(11.0, 2.0 * len(results)), 4.6))
+    labels = [textwrap.fill(r["policy"], 16) for r in results]
+    for ax, key, limit, unit in ((axes[0], "touchdown_speed_m_s", required_speed_m_s, "touchdown speed [m/s]"),
+                                 (axes[1], "tilt_deg", SUCCESS_TILT_DEG, "tilt at touchdown [deg]")):
+        data = [np.array([e[key] for e in r["episodes"]], dtype=float) for r in results]
+        data = [d[np.isfinite(d)] for d in data]
+        ax.boxplot(data, showfliers=False)
+        ax.set_xticks(range(1, len(labels) + 1), labels, fontsize=8)
+        for i, d in enumerate(data, start=1):
+            jitter = np.random.default_rng(i).uniform(-0.12, 0.12, d.size)
+            ax.plot(i + jitter, d, "o", ms=3, alpha=0.6)
+        ax.axhline(limit, color="k", ls="--", lw=1)
+        ax.set_ylabel(unit)
+        ax.grid(alpha=0.3)
+    axes[0].set_title(f"speed (dashed: required {required_speed_m_s:g} m/s)")
+    axes[1].set_title(f"tilt (dashed: success below {SUCCESS_TILT_DEG:g} deg)")
+    fig.tight_layout()
+    out = _save_figure(fig, path)
+    plt.close(fig)
+    return out
+
+
+def _save_figure(fig: Any, path: str | Path) -> Path:
+    from agents.io import write_atomic  # noqa: PLC0415
+
+    return write_atomic(path, lambda tmp: fig.savefig(tmp, dpi=110, format=Path(path).suffix.lstrip(".")))
+
+
+def render_episode(policy: Policy, scenario: dict[str, Any], path: str | Path, env_id: str = PLAN_ENV,
+                   env_config: str | dict | EnvConfig = "anchor-release") -> dict[str, Any]:
+    """Run one episode with ``render_mode="rgb_array"`` and save three frames (hanging, mid-fall, touchdown)."""
+    import matplotlib  # noqa: PLC0415
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    cfg = env_config if isinstance(env_config, EnvConfig) else load_env_config(env_config)
+    env = gym.make(env_id, config=cfg, render_mode="rgb_array")
+    first = []
+    env.reset(seed=scenario["seed"], options=scenario["options"])
+    first.append(env.render())
+    env.close()
+    env = gym.make(env_id, config=cfg, render_mode="rgb_array")
+    record = run_episode(env, policy, scenario, env_id, cfg)
+    fall = env.unwrapped.fall_frames()
+    frames = first + ([fall[len(fall) // 2], fall[-1]] if fall else [env.render()])
+    titles = ["hanging", "falling", "touchdown"][: len(frames)]
+    fig, axes = plt.subplots(1, len(frames), figsize=(5.5 * len(frames), 4))
+    for ax, frame, title in zip(np.atleast_1d(axes), frames, titles, strict=True):
+        ax.imshow(frame)
+        ax.set_title(title)
+        ax.axis("off")
+    fig.suptitle(f"{policy.name} on {scenario['id']}: {record['touchdown_speed_m_s']:.2f} m/s, "
+                 f"tilt {record['tilt_deg']:.2f} deg")
+    fig.tight_layout()
+    _save_figure(fig, path)
+    plt.close(fig)
+    env.close()
+    return record
+
+
+# --- trained runs ----------------------------------------------------------------------------------------------------
+def load_run(run_dir: str | Path, checkpoint: str = "final"):
+    """Load one trained run directory (``runs/<name>/seed-<k>``) as a :class:`agents.train.RunPolicy`.
+
+    ``checkpoint``: ``final`` (``model.zip``), ``best`` (the evaluation callback's best) or ``last`` (the newest
+    checkpoint; what ``--resume`` continues from).
+    """
+    from agents.train import RunPolicy  # noqa: PLC0415 - keeps torch out of baseline-only evaluations
+
+    return RunPolicy.load(run_dir, checkpoint)
+
+
+def run_dirs(path: str | Path) -> list[Path]:
+    """A run directory itself, or the ``seed-*`` run directories below an experiment directory."""
+    path = Path(path)
+    if (path / "config.yaml").is_file():
+        return [path]
+    seeds = sorted(p for p in path.glob("seed-*") if (p / "config.yaml").is_file())
+    if not seeds:
+        raise ConfigError("run_dir", str(path), "a run directory (with config.yaml) or one holding seed-*/ runs")
+    return seeds
+
+
+# --- command line -----------------------------------------------------------------------------------------------------
+def evaluate_targets(targets: list[str], scenarios: list[dict[str, Any]], env: str | None = None,
+                     env_config: str = "anchor-release", n_jobs: int = 1, progress: bool = True,
+                     optimiser: dict[str, int] | None = None, checkpoint: str = "final") -> list[dict[str, Any]]:
+    """Evaluate run directories and baseline names; baselines run on ``env`` or else on the first run's env."""
+    runs, results = [], []
+    for target in targets:
+        if target not in BASELINES:
+            policies = [load_run(d, checkpoint) for d in run_dirs(target)]
+            runs.append((target, policies))
+    env_id = ENV_ALIASES.get(env, env) if env else (runs[0][1][0].env_id if runs else PLAN_ENV)
+    base_cfg = runs[0][1][0].env_config if runs and not env else load_env_config(env_config)
+    for target in targets:
+        if target in BASELINES:
+            b_env = env_id if target != "optimiser" else PLAN_ENV
+            kwargs = dict(optimiser or {}) if target == "optimiser" else {}
+            policy = make_baseline(target, b_env, base_cfg, **kwargs)
+            results.append(evaluate_policy(policy, scenarios, b_env, base_cfg, n_jobs, progress))
+            continue
+        policies = dict(runs)[target]
+        per_seed = [evaluate_policy(p, scenarios, p.env_id, p.env_config, n_jobs, progress, name=p.name)
+                    for p in policies]
+        results.append(combine_seeds(per_seed, name=Path(target).name))
+    return results
+
+
+def write_report(results: list[dict[str, Any]], out_dir: str | Path, scenarios: list[dict[str, Any]],
+                 meta: dict[str, Any] | None = None) -> dict[str, Path]:
+    """Write ``evaluation.json``, ``evaluation.md`` and ``distributions.png`` into ``out_dir``."""
+    out = Path(out_dir)
+    table = markdown_table(results)
+    paths = {
+        "json": write_json_atomic(out / "evaluation.json",
+                                  {"meta": meta or {}, "scenarios": scenarios, "results": results}),
+        "markdown": write_text_atomic(out / "evaluation.md", table),
+        "plot": plot_distributions(results, out / "distributions.png"),
+    }
+    return paths
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    """Command-line arguments of ``python -m agents.evaluate``."""
+    p = argparse.ArgumentParser(prog="python -m agents.evaluate", description=__doc__.split("\n\n")[0])
+    p.add_argument("targets", nargs="+", help="run directories and/or baseline names: " + ", ".join(BASELINES))
+    p.add_argument("--scenarios", help="scenario file (JSON/YAML list of {id, seed, options}); default: held-out set")
+    p.add_argument("--n-scenarios", type=int, default=DEFAULT_COUNT, help="size of the default held-out set")
+    p.add_argument("--env", help="env of the baselines: plan, release or an env id (default: the first run's)")
+    p.add_argument("--env-config", default="anchor-release", help="env config of the baselines without a run")
+    p.add_argument("--checkpoint", default="final", choices=("final", "best", "last"))
+    p.add_argument("--out", default="runs/evaluation", help="output folder (JSON, markdown, plots)")
+    p.add_argument("--jobs", type=int, default=1, help="worker processes")
+    p.add_argument("--population", type=int, default=8, help="optimiser: candidates per iteration")
+    p.add_argument("--iterations", type=int, default=3, help="optimiser: cross-entropy iterations")
+    p.add_argument("--render", action="store_true", help="also save a rendered episode of the first target")
+    p.add_argument("--no-progress", action="store_true")
+    return p.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point: evaluate, write the report, print the table."""
+    args = parse_args(argv)
+    try:
+        scenarios = load_scenarios(args.scenarios) if args.scenarios else held_out_scenarios(args.n_scenarios)
+        optimiser = {"population": args.population, "iterations": args.iterations,
+                     "elite": min(3, args.population)}
+        results = evaluate_targets(args.targets, scenarios, args.env, args.env_config, args.jobs,
+                                   not args.no_progress, optimiser, args.checkpoint)
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    write_report(results, args.out, scenarios, {"argv": sys.argv[1:] if argv is None else argv})
+    if args.render:
+        first = args.targets[0]
+        policy = (make_baseline(first, results[0]["env_id"]) if first in BASELINES
+                  else load_run(run_dirs(first)[0], args.checkpoint))
+        render_episode(policy, scenarios[0], Path(args.out) / "episode.png", results[0]["env_id"],
+                       getattr(policy, "env_config", args.env_config))
+    print(markdown_table(results))
+    print(f"written to {args.out}/ (evaluation.json, evaluation.md, distributions.png)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

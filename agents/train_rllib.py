@@ -1,0 +1,412 @@
+"""Train PPO with Ray RLlib on ``AnchorRelease-v0`` or ``AnchorPlan-v0``: the scale-out path to many machines.
+
+    python -m agents.train_rllib --config configs/agents/rllib-release.yaml [--set key=value ...] [--address ADDR]
+
+The config is YAML data validated by :class:`RllibConfig` (errors name the dotted key). The env is registered for
+the Ray workers with ``tune.register_env`` under :data:`RLLIB_ENV_NAME`; its creator (:func:`make_rllib_env`)
+imports ``moor_env`` inside the worker process, so every worker builds its own env from the env config.
+
+Ray: with no address (config ``ray.address``, ``--address`` or the ``RAY_ADDRESS`` variable) a local instance is
+started on this machine (``ray.num_cpus`` CPUs); with one, the run joins that cluster (``ray start --head`` on
+one node, ``ray start --address=HEAD:6379`` on the others) and the env runners spread over its nodes.
+
+Run directory ``<out_dir>/<name>/seed-<seed>/``: ``rllib_config.yaml`` (resolved config), ``env_config.yaml``,
+``meta.json`` (versions, git commit, the cluster's CPUs and nodes, status, env steps, wall time, throughput),
+``progress.json`` (one row per iteration) and ``checkpoints/iter-<N>/`` (RLlib ``save_to_path``) with
+``checkpoints/latest.json`` naming the newest, written after it. :class:`RllibPolicy` loads a run's policy for
+:func:`agents.evaluate.evaluate_policy`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import shutil
+import sys
+import time
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import Field, model_validator
+from tqdm import tqdm
+
+from agents.config import EnvSection, _KeyedError, _Strict, load_model_config, parse_set
+from agents.io import write_json_atomic, write_yaml_atomic
+from agents.policy import Policy
+from moor_env.envs.config import EnvConfig, load_env_config
+from moor_env.errors import ConfigError
+
+RLLIB_ENV_NAME = "moor_env-rllib"
+ACTIVATIONS = ("tanh", "relu", "elu", "swish", "linear")
+MODULE_PATH = ("learner_group", "learner", "rl_module", "default_policy")
+
+
+# --- config -----------------------------------------------------------------------------------------------------------
+class RaySection(_Strict):
+    """Where to run: a local Ray instance (no address) or an existing cluster."""
+
+    address: str | None = Field(None, description="cluster to join ('auto', 'HOST:6379', 'ray://HOST:10001'); "
+                                                   "None: RAY_ADDRESS if set, else a local instance")
+    num_cpus: int | None = Field(None, ge=1, le=4096, description="CPUs of a local instance (None: all)")
+    runtime_env: dict[str, Any] | None = Field(None, description="Ray runtime_env, e.g. {working_dir: .}")
+
+
+class EnvRunnerSection(_Strict):
+    """RLlib ``config.env_runners(...)``: sampling processes (actors) and envs per process."""
+
+    num_env_runners: int = Field(2, ge=0, le=4096, description="remote sampling actors (0: sample in the driver)")
+    num_envs_per_env_runner: int = Field(1, ge=1, le=256)
+    num_cpus_per_env_runner: int = Field(1, ge=1, le=64)
+    rollout_fragment_length: int | Literal["auto"] = "auto"
+    sample_timeout_s: float = Field(600.0, gt=0.0)
+
+    @model_validator(mode="after")
+    def _fragment(self) -> EnvRunnerSection:
+        if isinstance(self.rollout_fragment_length, int) and self.rollout_fragment_length < 1:
+            raise _KeyedError("env_runners.rollout_fragment_length", self.rollout_fragment_length, ">= 1 or 'auto'")
+        return self
+
+
+class PPOSection(_Strict):
+    """RLlib ``PPOConfig.training(...)`` arguments (RLlib's names and meaning)."""
+
+    lr: float = Field(3e-4, gt=0.0, le=1.0)
+    gamma: float = Field(0.99, ge=0.0, le=1.0)
+    lambda_: float = Field(0.95, ge=0.0, le=1.0, description="GAE lambda")
+    clip_param: float = Field(0.2, gt=0.0, le=10.0)
+    vf_clip_param: float = Field(10.0, gt=0.0)
+    vf_loss_coeff: float = Field(1.0, ge=0.0, le=100.0)
+    entropy_coeff: float = Field(0.0, ge=0.0, le=10.0)
+    use_kl_loss: bool = True
+    kl_coeff: float = Field(0.2, ge=0.0, le=100.0)
+    kl_target: float = Field(0.01, gt=0.0, le=10.0)
+    grad_clip: float | None = Field(None, gt=0.0)
+    train_batch_size_per_learner: int = Field(4000, ge=2, description="env steps per training iteration")
+    minibatch_size: int = Field(128, ge=1)
+    num_epochs: int = Field(10, ge=1, le=1000)
+
+
+class ModelSection(_Strict):
+    """RLlib ``DefaultModelConfig``: the MLP of the policy and value heads."""
+
+    fcnet_hiddens: list[int] = Field(default_factory=lambda: [64, 64], min_length=1)
+    fcnet_activation: Literal[ACTIVATIONS] = "tanh"  # type: ignore[valid-type]
+    vf_share_layers: bool = False
+
+    @model_validator(mode="after")
+    def _sizes(self) -> ModelSection:
+        for i, n in enumerate(self.fcnet_hiddens):
+            if not 1 <= n <= 4096:
+                raise _KeyedError(f"model.fcnet_hiddens[{i}]", n, "1 .. 4096")
+        return self
+
+
+class CheckpointSection(_Strict):
+    """Checkpoints every ``every_iterations`` iterations and at the end; the newest ``keep`` are kept."""
+
+    every_iterations: int = Field(10, ge=1)
+    keep: int = Field(2, ge=1, le=1000)
+
+
+class RllibConfig(_Strict):
+    """A Ray RLlib PPO run: env, budget, seed, Ray connection, sampling, PPO, model, checkpoints, outputs."""
+
+    name: str = Field(..., min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")
+    description: str = ""
+    env: EnvSection = EnvSection(id="moor_env/AnchorRelease-v0")
+    total_timesteps: int = Field(..., ge=1, description="train until this many env steps are sampled")
+    seed: int = Field(0, ge=0, lt=2**31)
+    ray: RaySection = RaySection()
+    env_runners: EnvRunnerSection = EnvRunnerSection()
+    num_learners: int = Field(0, ge=0, le=1024, description="remote learner actors (0: learn in the driver)")
+    torch_threads: int = Field(1, ge=1, le=256, description="torch threads of the driver's learner")
+    ppo: PPOSection = PPOSection()
+    model: ModelSection = ModelSection()
+    checkpoint: CheckpointSection = CheckpointSection()
+    progress_bar: bool = True
+    out_dir: str = "runs"
+
+    @model_validator(mode="after")
+    def _batches(self) -> RllibConfig:
+        if self.ppo.minibatch_size > self.ppo.train_batch_size_per_learner:
+            raise _KeyedError("ppo.minibatch_size", self.ppo.minibatch_size,
+                              f"<= ppo.train_batch_size_per_learner = {self.ppo.train_batch_size_per_learner}")
+        return self
+
+
+def load_rllib_config(config: str | Path | dict[str, Any], overrides: dict[str, Any] | None = None) -> RllibConfig:
+    """Load (bundled name such as ``rllib-release`` or a path), override (``{dotted key: value}``) and validate
+    (:func:`agents.config.load_model_config`).
+
+    Raises
+    ------
+    ConfigError
+        Naming the first invalid key, its value and what is allowed.
+    """
+    return load_model_config(RllibConfig, config, overrides)
+
+
+# --- env and algorithm ------------------------------------------------------------------------------------------------
+def make_rllib_env(env_context: dict[str, Any]):
+    """Env creator registered with ``tune.register_env``; runs inside each Ray worker.
+
+    ``env_context`` (RLlib's ``EnvContext``, a dict) holds ``id`` and ``config`` (the env config as a mapping).
+    """
+    import gymnasium as gym  # noqa: PLC0415
+
+    import moor_env  # noqa: F401, PLC0415 - registers the env ids in this worker process
+
+    return gym.make(env_context["id"], config=dict(env_context["config"]))
+
+
+def build_ppo_config(cfg: RllibConfig, env_cfg: EnvConfig):
+    """The RLlib ``PPOConfig`` of a run (new API stack)."""
+    from ray.rllib.algorithms.ppo import PPOConfig  # noqa: PLC0415
+    from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig  # noqa: PLC0415
+
+    runners = cfg.env_runners
+    return (
+        PPOConfig()
+        .environment(RLLIB_ENV_NAME, env_config={"id": cfg.env.id, "config": env_cfg.model_dump(mode="json")})
+        .env_runners(num_env_runners=runners.num_env_runners, num_envs_per_env_runner=runners.num_envs_per_env_runner,
+                     num_cpus_per_env_runner=runners.num_cpus_per_env_runner,
+                     rollout_fragment_length=runners.rollout_fragment_length,
+                     sample_timeout_s=runners.sample_timeout_s)
+        .learners(num_learners=cfg.num_learners)
+        .training(**cfg.ppo.model_dump())
+        .rl_module(model_config=DefaultModelConfig(**cfg.model.model_dump()))
+        .debugging(seed=cfg.seed)
+    )
+
+
+def checked_ppo_config(cfg: RllibConfig, env_cfg: EnvConfig):
+    """:func:`build_ppo_config` passed through RLlib's own cross-field checks (batch sizes, fragment lengths);
+    a failed check is a ConfigError carrying RLlib's message."""
+    ppo = build_ppo_config(cfg, env_cfg)
+    try:
+        ppo.validate()
+    except ValueError as exc:
+        raise ConfigError("config", cfg.name, "settings RLlib accepts", str(exc).split("\n")[0]) from None
+    return ppo
+
+
+def connect_ray(cfg: RllibConfig, address: str | None = None) -> dict[str, Any]:
+    """Join the cluster (``address``, else ``ray.address``, else ``RAY_ADDRESS``) or start a local instance.
+
+    An already initialised Ray (e.g. a test's ``ray.init``) is used as it is. Returns the cluster's CPUs and nodes.
+    """
+    import ray  # noqa: PLC0415
+
+    if not ray.is_initialized():
+        address = address or cfg.ray.address or os.environ.get("RAY_ADDRESS")
+        kwargs: dict[str, Any] = {"include_dashboard": False, "runtime_env": cfg.ray.runtime_env}
+        if address is None and cfg.ray.num_cpus is not None:
+            kwargs["num_cpus"] = cfg.ray.num_cpus
+        ray.init(address=address, **kwargs)
+    nodes = [n for n in ray.nodes() if n.get("Alive")]
+    return {"address": ray.get_runtime_context().gcs_address, "cluster_cpus": ray.cluster_resources().get("CPU", 0.0),
+            "nodes": len(nodes), "ray": ray.__version__}
+
+
+# --- run directory ----------------------------------------------------------------------------------------------------
+def run_dir_of(cfg: RllibConfig) -> Path:
+    """``<out_dir>/<name>/seed-<seed>``."""
+    return Path(cfg.out_dir) / cfg.name / f"seed-{cfg.seed}"
+
+
+def save_checkpoint(algo: Any, run_dir: Path, iteration: int, keep: int) -> Path:
+    """Save to ``checkpoints/iter-<N>`` (via a temporary folder renamed into place), then point ``latest.json``
+    at it and delete all but the newest ``keep``; an interrupted save leaves the previous checkpoint intact."""
+    root = run_dir / "checkpoints"
+    final = root / f"iter-{iteration:06d}"
+    tmp = root / f".iter-{iteration:06d}.tmp"
+    shutil.rmtree(tmp, ignore_errors=True)
+    algo.save_to_path(str(tmp.resolve()))
+    shutil.rmtree(final, ignore_errors=True)
+    os.replace(tmp, final)
+    write_json_atomic(root / "latest.json", {"iteration": iteration, "path": final.name})
+    for old in sorted(root.glob("iter-*"))[:-keep]:
+        shutil.rmtree(old, ignore_errors=True)
+    return final
+
+
+def latest_checkpoint(run_dir: str | Path) -> Path:
+    """The newest checkpoint folder of a run (``checkpoints/latest.json``)."""
+    import json  # noqa: PLC0415
+
+    pointer = Path(run_dir) / "checkpoints" / "latest.json"
+    if not pointer.is_file():
+        raise ConfigError("run_dir", str(run_dir), "an RLlib run directory with checkpoints/latest.json")
+    return pointer.parent / json.loads(pointer.read_text())["path"]
+
+
+def _metric(result: dict[str, Any], *keys: str) -> float:
+    node: Any = result
+    for k in keys:
+        if not isinstance(node, dict) or k not in node:
+            return math.nan
+        node = node[k]
+    try:
+        return float(node)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def iteration_row(result: dict[str, Any], wall_s: float, steps_before: int) -> dict[str, Any]:
+    """One ``progress.json`` row from an RLlib result dict: steps, episodes, returns, losses, throughput."""
+    steps = int(_metric(result, "env_runners", "num_env_steps_sampled_lifetime"))
+    it_s = _metric(result, "time_this_iter_s")
+    return {
+        "iteration": int(result["training_iteration"]),
+        "env_steps": steps,
+        "episodes": int(_metric(result, "env_runners", "num_episodes_lifetime")),
+        "episode_return_mean": _metric(result, "env_runners", "episode_return_mean"),
+        "episode_len_mean": _metric(result, "env_runners", "episode_len_mean"),
+        "total_loss": _metric(result, "learners", "default_policy", "total_loss"),
+        "entropy": _metric(result, "learners", "default_policy", "entropy"),
+        "iteration_s": it_s,
+        "sample_s": _metric(result, "env_runners", "sample"),
+        "wall_s": wall_s,
+        "env_steps_per_s": (steps - steps_before) / it_s if it_s > 0 else math.nan,
+    }
+
+
+def _meta(cfg: RllibConfig, cluster: dict[str, Any]) -> dict[str, Any]:
+    from agents.train import git_state, versions  # noqa: PLC0415
+
+    return {"name": cfg.name, "seed": cfg.seed, "framework": "rllib", "status": "running", "env_steps": 0,
+            "train_wall_s": 0.0, "started": time.strftime("%Y-%m-%dT%H:%M:%S"), **git_state(),
+            "versions": {**versions(), "ray": cluster["ray"]}, "cluster": cluster, "cpu_count": os.cpu_count(),
+            "argv": sys.argv[1:]}
+
+
+# --- training ---------------------------------------------------------------------------------------------------------
+def train_rllib(cfg: RllibConfig, address: str | None = None) -> tuple[Path, dict[str, Any]]:
+    """Train until ``cfg.total_timesteps`` env steps are sampled; returns the run directory and its ``meta``.
+
+    ``meta`` holds ``env_steps``, ``train_wall_s`` (the training loop), ``build_s`` (starting the algorithm and its
+    actors) and ``env_steps_per_s`` (env steps / training-loop wall time: sampling and learning together).
+    """
+    import torch  # noqa: PLC0415
+    from ray import tune  # noqa: PLC0415
+
+    env_cfg = load_env_config(cfg.env.config, cfg.env.overrides)
+    ppo = checked_ppo_config(cfg, env_cfg)
+    run_dir = run_dir_of(cfg)
+    cluster = connect_ray(cfg, address)
+    tune.register_env(RLLIB_ENV_NAME, make_rllib_env)
+    torch.set_num_threads(cfg.torch_threads)
+    write_yaml_atomic(run_dir / "rllib_config.yaml", cfg.model_dump(mode="json"))
+    write_yaml_atomic(run_dir / "env_config.yaml", env_cfg.model_dump(mode="json"))
+    meta = _meta(cfg, cluster)
+    write_json_atomic(run_dir / "meta.json", meta)
+
+    t_build = time.perf_counter()
+    algo = ppo.build_algo()
+    meta["build_s"] = time.perf_counter() - t_build
+    rows: list[dict[str, Any]] = []
+    steps = 0
+    bar = tqdm(total=cfg.total_timesteps, desc=f"rllib {cfg.name}", unit="step", disable=not cfg.progress_bar)
+    t0 = time.perf_counter()
+    try:
+        while steps < cfg.total_timesteps:
+            row = iteration_row(algo.train(), time.perf_counter() - t0, steps)
+            bar.update(min(row["env_steps"], cfg.total_timesteps) - min(steps, cfg.total_timesteps))
+            bar.set_postfix(ret=f"{row['episode_return_mean']:.3f}", sps=f"{row['env_steps_per_s']:.0f}")
+            steps = row["env_steps"]
+            rows.append(row)
+            write_json_atomic(run_dir / "progress.json", rows)
+            if row["iteration"] % cfg.checkpoint.every_iterations == 0 or steps >= cfg.total_timesteps:
+                save_checkpoint(algo, run_dir, row["iteration"], cfg.checkpoint.keep)
+    finally:
+        bar.close()
+        wall_s = time.perf_counter() - t0
+        meta.update(status="finished" if steps >= cfg.total_timesteps else "interrupted", env_steps=steps,
+                    iterations=len(rows), train_wall_s=wall_s, env_steps_per_s=steps / wall_s if wall_s > 0 else 0.0,
+                    finished=time.strftime("%Y-%m-%dT%H:%M:%S"))
+        write_json_atomic(run_dir / "meta.json", meta)
+        algo.stop()
+    return run_dir, meta
+
+
+# --- policy of a trained run ------------------------------------------------------------------------------------------
+class RllibPolicy(Policy):
+    """The RLModule of an RLlib run acting deterministically (the mean of its Gaussian), for ``evaluate_policy``.
+
+    Attributes: ``module``, ``env_id``, ``env_config`` (:class:`EnvConfig`), ``name``, ``run_dir``.
+    """
+
+    def __init__(self, module: Any, env_id: str, env_config: EnvConfig, name: str, run_dir: Path | None = None):
+        self.module, self.env_id, self.env_config, self.name, self.run_dir = module, env_id, env_config, name, run_dir
+        self._dist_cls = module.get_inference_action_dist_cls()
+
+    def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        """The deterministic action, clipped to the action box [-1, 1]."""
+        import torch  # noqa: PLC0415
+
+        with torch.no_grad():
+            out = self.module.forward_inference({"obs": torch.as_tensor(np.asarray(obs, np.float32)[None])})
+            action = self._dist_cls.from_logits(out["action_dist_inputs"]).to_deterministic().sample()
+        return np.clip(action.numpy()[0], -1.0, 1.0).astype(np.float32)
+
+    @classmethod
+    def load(cls, run_dir: str | Path) -> RllibPolicy:
+        """Load the newest checkpoint's policy module of a run directory (no Ray instance needed)."""
+        from ray.rllib.core.rl_module.rl_module import RLModule  # noqa: PLC0415
+
+        run_dir = Path(run_dir)
+        cfg = load_rllib_config(run_dir / "rllib_config.yaml")
+        module = RLModule.from_checkpoint(str(latest_checkpoint(run_dir).joinpath(*MODULE_PATH).resolve()))
+        return cls(module, cfg.env.id, load_env_config(run_dir / "env_config.yaml"), f"{cfg.name}/{run_dir.name}",
+                   run_dir)
+
+
+def is_rllib_run(run_dir: str | Path) -> bool:
+    """Whether a folder is an RLlib run directory (holds ``rllib_config.yaml``)."""
+    return (Path(run_dir) / "rllib_config.yaml").is_file()
+
+
+def load_run_policies(path: str | Path) -> list[Policy]:
+    """One policy per seed of a run or experiment directory, RLlib (this module) or stable-baselines3
+    (:func:`agents.evaluate.load_run`): ``runs/<name>/seed-<k>`` or ``runs/<name>`` holding ``seed-*/``."""
+    from agents.evaluate import load_run, run_dirs  # noqa: PLC0415
+
+    path = Path(path)
+    rllib = [path] if is_rllib_run(path) else sorted(p for p in path.glob("seed-*") if is_rllib_run(p))
+    if rllib:
+        return [RllibPolicy.load(p) for p in rllib]
+    return [load_run(p) for p in run_dirs(path)]
+
+
+# --- command line -----------------------------------------------------------------------------------------------------
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    """Command-line arguments of ``python -m agents.train_rllib``."""
+    p = argparse.ArgumentParser(prog="python -m agents.train_rllib", description=__doc__.split("\n\n")[0])
+    p.add_argument("--config", required=True, help="configs/agents/rllib-*.yaml or a bundled name (rllib-release)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a config key (dotted, value read as YAML), e.g. env_runners.num_env_runners=8")
+    p.add_argument("--address", help="Ray cluster to join (default: ray.address, then RAY_ADDRESS, else local)")
+    return p.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point: train, then print the run directory and the throughput."""
+    args = parse_args(argv)
+    try:
+        cfg = load_rllib_config(args.config, parse_set(args.set))
+        run_dir, meta = train_rllib(cfg, args.address)
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    cl = meta["cluster"]
+    print(f"run: {run_dir}")
+    print(f"throughput: {meta['env_steps_per_s']:.1f} env steps/s ({meta['env_steps']} steps in "
+          f"{meta['train_wall_s']:.1f} s, {meta['iterations']} iterations; start-up {meta['build_s']:.1f} s) on "
+          f"{cl['nodes']} node(s), {cl['cluster_cpus']:.0f} CPUs, {cfg.env_runners.num_env_runners} env runner(s)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,155 @@
+"""Accuracy of the coarse pre-release step (``control.pre_release_dt_s``) of AnchorRelease-v0.
+
+Run from the repository root: ``python benchmarks/pre_release_step.py [--episodes 12] [--steps 0.05 0.1 0.2]``.
+Writes ``benchmarks/results/pre_release_step.json``.
+
+Each episode draws its scenario from the default config (``configs/envs/anchor-release.yaml``, seeds 1000, 1001,
+...) and is driven by seeded random controls (spacing and winch rates redrawn every 10 s, release at a random
+step between 25 and 55). It is run with the pre-release phase at the scene's own step (the reference) and at
+each coarse step; the fall always runs at the scene's step. Compared with the reference: touchdown speed and
+tilt, and the anchor's vertical velocity and height at the release. Two runs give the reference's own
+uncertainty: the release delayed by one scene step, and the pre-release phase at half the scene's step (a
+refinement; if it moves the outcome, the reference is not converged at that level either).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from tqdm.auto import tqdm
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+import gymnasium as gym  # noqa: E402
+from _machine import machine  # noqa: E402
+
+import moor_env  # noqa: E402, F401 - registers the envs
+from moor_env.envs import core as envcore  # noqa: E402
+from moor_env.physics import layout as L  # noqa: E402
+
+RESULTS = ROOT / "benchmarks" / "results" / "pre_release_step.json"
+ENV_ID = "moor_env/AnchorRelease-v0"
+
+
+class ReferenceVariants:
+    """The reference's perturbations, applied to one core: release ``delay_steps`` scene steps late, or the
+    pre-release phase at ``step_factor`` times the scene's step."""
+
+    def __init__(self, core: envcore.InstallationCore, delay_steps: int = 0, step_factor: float = 1.0) -> None:
+        self.core = core
+        self.delay_steps = delay_steps
+        self.step_factor = step_factor
+        self._begin = core.begin_step
+        self._pre_release = core._pre_release
+        core.begin_step = self.begin_step
+        if step_factor != 1.0:
+            core._pre_release = self.pre_release
+
+    def pre_release(self, t_end_s: float, phase: str) -> envcore.Advance:
+        sim = self.core.sim
+        self.core.saved_state = None
+        return envcore.Advance(t_end_s, False, phase, envcore._even_step(t_end_s - sim.state.t,
+                                                                          self.step_factor * sim.dt))
+
+    def begin_step(self, action):
+        core = self.core
+        if action[2] > 0 and self.delay_steps:
+            sim = core.sim
+            sim.set_vessel_motion(sim.state.t, 1.0, np.zeros(2), ramp_s=core.ramp_s)
+            envcore.run_advance(core, self.pre_release(sim.state.t + self.delay_steps * sim.dt, "control"))
+        return self._begin(action)
+
+
+def run_episode(env, seed: int) -> dict:
+    """One episode with seeded random controls; the release state and the touchdown."""
+    core = env.unwrapped.core
+    rng = np.random.default_rng(seed)
+    release_step = int(rng.integers(25, 56))
+    rates = rng.uniform(-1.0, 1.0, 2)
+    cpu0 = time.process_time()
+    env.reset(seed=seed)
+    release = {}
+    for k in range(60):
+        if k % 10 == 0:
+            rates = rng.uniform(-1.0, 1.0, 2)
+        if k == release_step:
+            b = core.sim.state.body_state
+            release = {"vz_m_s": float(b[L.BS_VEL + 2]), "z_m": float(b[L.BS_POS + 2]), "tilt_deg": core.sim.tilt_deg()}
+        _, _, terminated, truncated, info = env.step(np.array([rates[0], rates[1], 1.0 if k >= release_step else -1.0],
+                                                              np.float32))
+        if terminated or truncated:
+            break
+    td = info.get("touchdown", {})
+    return {"seed": seed, "status": info["sim_status"], "cpu_s": time.process_time() - cpu0,
+            "speed_m_s": td.get("speed_m_s"), "tilt_deg": td.get("tilt_deg"), "release": release,
+            "scene_dt_s": core.sim.dt, "fallbacks": core.fallbacks, "scenario": core.scenario}
+
+
+def _summary(rows: list[dict], case: str) -> dict:
+    r = [x for x in rows if x["case"] == case and x.get("dspeed_m_s") is not None]
+    out = {"episodes": len(r), "fallbacks": int(sum(x["fallbacks"] for x in r)),
+           "cpu_s_median": float(np.median([x["cpu_s"] for x in r]))}
+    for key in ("dspeed_m_s", "dtilt_deg", "release_dvz_m_s", "release_dz_m"):
+        v = np.abs([x[key] for x in r])
+        out[key] = {"median": float(np.median(v)), "max": float(v.max())}
+    return out
+
+
+def main(argv: list[str] | None = None) -> dict:
+    """Run every case on every episode, write the JSON and print a table."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--episodes", type=int, default=12)
+    parser.add_argument("--steps", type=float, nargs="+", default=[0.05, 0.1, 0.2], help="pre-release steps [s]")
+    args = parser.parse_args(argv)
+    load_before = os.getloadavg()[0]
+    cases = [("reference", None, 0, 1.0), ("release one step later", None, 1, 1.0), ("half step", None, 0, 0.5)]
+    cases += [(f"pre_release_dt_s={dt:g}", dt, 0, 1.0) for dt in args.steps]
+    envs = {}
+    rows = []
+    for seed in tqdm(range(1000, 1000 + args.episodes), desc="episodes"):
+        ref = None
+        for name, dt, delay, factor in cases:
+            if name not in envs:
+                envs[name] = gym.make(ENV_ID, overrides={"control.pre_release_dt_s": dt})
+                ReferenceVariants(envs[name].unwrapped.core, delay, factor)
+            row = {"case": name, **run_episode(envs[name], seed)}
+            if ref is None:
+                ref = row
+            if row["speed_m_s"] is not None and ref["speed_m_s"] is not None:
+                row.update(dspeed_m_s=row["speed_m_s"] - ref["speed_m_s"], dtilt_deg=row["tilt_deg"] - ref["tilt_deg"],
+                           release_dvz_m_s=row["release"]["vz_m_s"] - ref["release"]["vz_m_s"],
+                           release_dz_m=row["release"]["z_m"] - ref["release"]["z_m"])
+            rows.append(row)
+    summary = {name: _summary(rows, name) for name, *_ in cases[1:]}
+    result = {
+        "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "machine": machine(),
+        "load_average_1min": {"before": load_before, "after": os.getloadavg()[0]},
+        "config": "anchor-release (default), scenarios drawn with seeds 1000..",
+        "summary_abs_differences_to_reference": summary,
+        "rows": rows,
+    }
+    RESULTS.parent.mkdir(parents=True, exist_ok=True)
+    RESULTS.write_text(json.dumps(result, indent=2))
+    print(f"written {RESULTS.relative_to(ROOT)}; {result['machine']}")
+    print("| case | touchdown speed diff median / max [m/s] | tilt diff median / max [deg] | "
+          "release vz diff median / max [m/s] | fallbacks | CPU s/episode (median) |")
+    print("|---|---|---|---|---|---|")
+    for name, s in summary.items():
+        print(f"| {name} | {s['dspeed_m_s']['median']:.3f} / {s['dspeed_m_s']['max']:.3f} | "
+              f"{s['dtilt_deg']['median']:.2f} / {s['dtilt_deg']['max']:.2f} | "
+              f"{s['release_dvz_m_s']['median']:.3f} / {s['release_dvz_m_s']['max']:.3f} | {s['fallbacks']} | "
+              f"{s['cpu_s_median']:.3f} |")
+    return result
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,54 @@
+"""Held-out scenario set: fixed, seeded, outside the training choices; scenario files."""
+
+from __future__ import annotations
+
+import pytest
+
+from agents.scenarios import (
+    HELD_OUT_VALUES,
+    WAVE_SEED_RANGE,
+    held_out_scenarios,
+    load_scenarios,
+    save_scenarios,
+    validate_scenarios,
+)
+from moor_env.envs import load_env_config
+from moor_env.errors import ConfigError
+
+
+def test_fixed_and_seeded():
+    assert held_out_scenarios(10) == held_out_scenarios(10)
+    assert held_out_scenarios(10, seed=1) != held_out_scenarios(10)
+    assert len({s["id"] for s in held_out_scenarios(24)}) == 24
+
+
+def test_values_not_used_in_training():
+    """Depths, spacings, line lengths, currents and mass scales differ from every training choice."""
+    train = load_env_config("anchor-release").scenario
+    for name in ("water_depth_m", "vessel_spacing_over_depth", "mooring_line_length_over_depth", "current_scale",
+                 "anchor_mass_scale"):
+        assert not set(HELD_OUT_VALUES[name]) & set(getattr(train, name).choice), name
+    scenarios = held_out_scenarios(24)
+    assert any(s["options"]["sea_state_hs_m"] > train.sea_state_hs_m.uniform[1] for s in scenarios)
+    assert any(s["options"]["sea_state_tp_s"] > train.sea_state_tp_s.uniform[1] for s in scenarios)
+    assert all(s["options"]["sea_state_seed"] >= WAVE_SEED_RANGE[0] for s in scenarios)
+    for name, values in HELD_OUT_VALUES.items():  # balanced design: every value appears
+        assert {s["options"][name] for s in scenarios} == set(values)
+
+
+def test_file_round_trip(tmp_path):
+    scenarios = held_out_scenarios(3)
+    save_scenarios(scenarios, tmp_path / "s.json")
+    assert load_scenarios(tmp_path / "s.json") == scenarios
+
+
+@pytest.mark.parametrize(("data", "key"), [
+    ([{"id": "a", "seed": -1}], "scenarios[0].seed"),
+    ([{"id": "a", "options": {"depth": 1}}], "scenarios[0].options.depth"),
+    ([{"id": "a", "colour": 1}], "scenarios[0].colour"),
+    ([], "scenarios"),
+])
+def test_validation_names_the_key(data, key):
+    with pytest.raises(ConfigError) as err:
+        validate_scenarios(data)
+    assert err.value.key == key
