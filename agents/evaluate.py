@@ -377,8 +377,9 @@ def evaluate_targets(targets: list[str], scenarios: list[dict[str, Any]], env: s
     runs, results = [], []
     for target in targets:
         if target not in BASELINES:
-            policies = [load_run(d, checkpoint) for d in run_dirs(target)]
-            runs.append((target, policies))
+            from agents.train_rllib import load_run_policies  # noqa: PLC0415 - it imports this module
+
+            runs.append((target, load_run_policies(target, checkpoint)))
     env_id = ENV_ALIASES.get(env, env) if env else (runs[0][1][0].env_id if runs else PLAN_ENV)
     base_cfg = runs[0][1][0].env_config if runs and not env else load_env_config(env_config)
     for target in targets:
@@ -442,8 +443,10 @@ def main(argv: list[str] | None = None) -> int:
     write_report(results, args.out, scenarios, {"argv": sys.argv[1:] if argv is None else argv})
     if args.render:
         first = args.targets[0]
+        from agents.train_rllib import load_run_policies  # noqa: PLC0415 - it imports this module
+
         policy = (make_baseline(first, results[0]["env_id"]) if first in BASELINES
-                  else load_run(run_dirs(first)[0], args.checkpoint))
+                  else load_run_policies(first, args.checkpoint)[0])
         render_episode(policy, scenarios[0], Path(args.out) / "episode.png", results[0]["env_id"],
                        getattr(policy, "env_config", args.env_config))
     print(markdown_table(results))

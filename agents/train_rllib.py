@@ -368,16 +368,17 @@ def is_rllib_run(run_dir: str | Path) -> bool:
     return (Path(run_dir) / "rllib_config.yaml").is_file()
 
 
-def load_run_policies(path: str | Path) -> list[Policy]:
-    """One policy per seed of a run or experiment directory, RLlib (this module) or stable-baselines3
-    (:func:`agents.evaluate.load_run`): ``runs/<name>/seed-<k>`` or ``runs/<name>`` holding ``seed-*/``."""
+def load_run_policies(path: str | Path, checkpoint: str = "final") -> list[Policy]:
+    """One policy per seed of a run or experiment directory, RLlib (this module; its final checkpoint) or
+    stable-baselines3 (:func:`agents.evaluate.load_run` with ``checkpoint``): ``runs/<name>/seed-<k>`` or
+    ``runs/<name>`` holding ``seed-*/``."""
     from agents.evaluate import load_run, run_dirs  # noqa: PLC0415
 
     path = Path(path)
     rllib = [path] if is_rllib_run(path) else sorted(p for p in path.glob("seed-*") if is_rllib_run(p))
     if rllib:
         return [RllibPolicy.load(p) for p in rllib]
-    return [load_run(p) for p in run_dirs(path)]
+    return [load_run(p, checkpoint) for p in run_dirs(path)]
 
 
 # --- command line -----------------------------------------------------------------------------------------------------

@@ -28,10 +28,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from _machine import machine  # noqa: E402
+
 from moor_env import load_scene, simulate_drop, solve_statics  # noqa: E402
 from moor_env.crosscheck.moordyn import run_moordyn_drop  # noqa: E402
-
-from _machine import machine  # noqa: E402
 
 SCENE = "gjoa-500"
 REPEATS = 3

@@ -181,7 +181,8 @@ class SceneFactory:
         else:
             widen_m = ctl.spacing_rate_max_m_s * (horizon_s - 0.5 * accel_s)
         widen_m = min(widen_m, max(0.0, ctl.spacing_max_over_depth * depth_m - spacing_m))
-        haul_m = min(ctl.haul_rate_max_m_s * horizon_s, max(0.0, line_length_m - ctl.line_length_min_over_depth * depth_m))
+        haul_room_m = max(0.0, line_length_m - ctl.line_length_min_over_depth * depth_m)
+        haul_m = min(ctl.haul_rate_max_m_s * horizon_s, haul_room_m)
         return float(widen_m), float(haul_m)
 
     def scene_data(self, scenario: dict[str, Any]) -> dict[str, Any]:

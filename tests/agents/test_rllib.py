@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from agents.evaluate import evaluate_policy
+from agents.evaluate import evaluate_policy, evaluate_targets
 from agents.train_rllib import RllibPolicy, is_rllib_run, load_rllib_config, load_run_policies, main, train_rllib
 from moor_env.errors import ConfigError
 
@@ -78,3 +78,7 @@ def test_two_iterations_on_local_ray_write_a_loadable_run(tmp_path, local_ray, t
     res = evaluate_policy(policy, tiny_scenarios[:1], policy.env_id, policy.env_config, progress=False)
     (episode,) = res["episodes"]
     assert episode["steps"] >= 1 and np.isfinite(episode["reward"])
+    # the evaluation command takes RLlib runs like SB3 ones: same episode, same reward
+    (combined,) = evaluate_targets([str(run_dir.parent)], tiny_scenarios[:1], progress=False)
+    assert combined["summary"]["seeds"] == 1
+    assert combined["episodes"][0]["reward"] == episode["reward"]

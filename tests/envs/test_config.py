@@ -7,8 +7,8 @@ import pytest
 
 from moor_env.config import fidelity_presets
 from moor_env.envs import SCENARIO_FIELDS, load_env_config
-from moor_env.envs.core import SceneFactory, representative_scenario
 from moor_env.envs.config import env_config_names
+from moor_env.envs.core import SceneFactory, representative_scenario
 from moor_env.errors import ConfigError
 
 
