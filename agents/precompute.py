@@ -49,12 +49,14 @@ def precompute(train_config, n_scenarios: int, jobs: int = 1, progress: bool = T
     bar = tqdm(total=len(rows), desc="equilibria", disable=not progress)
     if jobs > 1:
         with mp.get_context("fork").Pool(jobs) as pool:
-            results = list(_iter_bar(pool.imap_unordered(_solve_one, [(data, r) for r in rows]), bar))
+            results = list(_iter_bar(pool.imap(_solve_one, [(data, r) for r in rows]), bar))
     else:
         results = list(_iter_bar((_solve_one((data, r)) for r in rows), bar))
     bar.close()
-    for origin, _ in results:
+    for row, (origin, _) in zip(rows, results, strict=True):
         key = "failed" if origin.startswith("failed") else origin
+        if key == "failed":
+            print(f"equilibrium {row}: {origin}", file=sys.stderr)
         counts[key] = counts.get(key, 0) + 1
     return counts
 

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import hashlib
+import io
 import itertools
 import json
 import os
@@ -39,6 +40,7 @@ import numpy as np
 
 from moor_env.config import FIDELITY_PATH, scene_from_dict
 from moor_env.envs.config import SCENARIO_RANGES, EnvConfig, StaticsCacheConfig, _values, load_env_config
+from moor_env.errors import StaticsNotConverged
 from moor_env.simulation import SimState, solve_statics
 
 # Scenario fields that do not change the static solution (see the module docstring).
@@ -85,6 +87,9 @@ def default_cache_dir() -> Path:
 
 
 _SHARED_MEMORY: OrderedDict[str, SimState] = OrderedDict()  # one LRU per process, shared by every env
+# Statics that did not converge, by key: a failed solve costs as much as tens of successful ones, and a training
+# run draws the same geometry again and again; the solver's message is kept to raise again at once.
+_SHARED_FAILURES: dict[str, str] = {}
 
 
 class EquilibriumCache:
@@ -121,12 +126,22 @@ class EquilibriumCache:
             self.memory.move_to_end(key)
             self.hits += 1
             return self.memory[key].copy(), "memory"
+        failure = _SHARED_FAILURES.get(key) or self._load_failure(key)
+        if failure is not None:
+            _SHARED_FAILURES[key] = failure
+            raise StaticsNotConverged(f"{failure} (cached failure of this geometry)")
         state = self._load(key)
         origin = "disk"
         if state is None:
             t0 = time.perf_counter()
             scene = scene_from_dict(json.loads(json.dumps(statics_data)))
-            state = solve_statics(scene).simulator.state.copy()
+            try:
+                state = solve_statics(scene).simulator.state.copy()
+            except StaticsNotConverged as exc:
+                self.solve_wall_s += time.perf_counter() - t0
+                _SHARED_FAILURES[key] = str(exc)
+                self._write_atomic(self._failure_path(key), str(exc).encode())
+                raise
             self.solve_wall_s += time.perf_counter() - t0
             self.solves += 1
             origin = "solved"
@@ -153,15 +168,30 @@ class EquilibriumCache:
         except (OSError, KeyError, ValueError):
             return None  # a damaged or foreign file: solve again (and overwrite it)
 
+    def _failure_path(self, key: str) -> Path | None:
+        return None if self.dir is None else self.dir / f"{key}.failed"
+
+    def _load_failure(self, key: str) -> str | None:
+        path = self._failure_path(key)
+        try:
+            return path.read_text() if path is not None and path.is_file() else None
+        except OSError:
+            return None
+
     def _save(self, key: str, state: SimState) -> None:
-        path = self._path(key)
+        buffer = io.BytesIO()
+        np.savez(buffer, **{name: getattr(state, name) for name in _ARRAYS}, t=state.t, released=state.released)
+        self._write_atomic(self._path(key), buffer.getvalue())
+
+    @staticmethod
+    def _write_atomic(path: Path | None, payload: bytes) -> None:
         if path is None:
             return
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
             with os.fdopen(fd, "wb") as fh:
-                np.savez(fh, **{name: getattr(state, name) for name in _ARRAYS}, t=state.t, released=state.released)
+                fh.write(payload)
             os.replace(tmp, path)  # atomic: concurrent workers never read a half-written file
         except OSError:
             pass  # a read-only home: the memory cache still works

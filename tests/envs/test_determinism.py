@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import gymnasium as gym
 import numpy as np
+import pytest
 
-from moor_env.envs import equilibria
+from moor_env.envs import equilibria, load_env_config
+from moor_env.envs.core import SceneFactory, representative_scenario
+from moor_env.errors import StaticsNotConverged
 
 
 def _episode(env, seed, n_steps=12, action_seed=7):
@@ -58,3 +61,28 @@ def test_cached_equilibrium_gives_identical_episode(tmp_path):
     obs_disk, rew_disk, _ = _episode(env2, 11)
     assert env2.unwrapped.core.statics_origin == "disk"
     assert np.array_equal(obs_solved, obs_disk) and np.array_equal(rew_solved, rew_disk)
+
+
+def test_a_failed_equilibrium_is_remembered_not_solved_again(tmp_path, monkeypatch):
+    """A geometry whose statics do not converge fails once per cache: later draws raise at once (in this process
+    from memory, in another from the ``.failed`` marker on disk) instead of repeating a solve of up to minutes."""
+    calls = []
+
+    def failing_solve(scene):
+        calls.append(scene.name)
+        raise StaticsNotConverged("static equilibrium not reached (test)")
+
+    monkeypatch.setattr(equilibria, "solve_statics", failing_solve)
+    monkeypatch.setattr(equilibria, "_SHARED_FAILURES", {})
+    cfg = load_env_config("tiny", {"statics.dir": str(tmp_path)})
+    factory = SceneFactory(cfg)
+    data = factory.statics_data(representative_scenario(cfg))
+    equilibria._SHARED_MEMORY.clear()
+    for _ in range(2):
+        with pytest.raises(StaticsNotConverged, match="not reached"):
+            equilibria.EquilibriumCache(cfg.statics).state(data)
+    assert len(calls) == 1
+    monkeypatch.setattr(equilibria, "_SHARED_FAILURES", {})  # another process: only the disk marker
+    with pytest.raises(StaticsNotConverged, match="cached failure"):
+        equilibria.EquilibriumCache(cfg.statics).state(data)
+    assert len(calls) == 1
