@@ -58,4 +58,15 @@ class SimulationDiverged(MoorEnvError, RuntimeError):
 
 
 class StaticsNotConverged(MoorEnvError, RuntimeError):
-    """The static equilibrium solver did not reach its tolerance."""
+    """The static equilibrium solver did not reach its tolerance.
+
+    Parameters
+    ----------
+    message : str
+    residual_rel : float, optional
+        Largest residual over its degree of freedom's weight scale when the solver stopped (None if unknown).
+    """
+
+    def __init__(self, message: str, residual_rel: float | None = None) -> None:
+        self.residual_rel = residual_rel
+        super().__init__(message)

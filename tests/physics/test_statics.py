@@ -100,3 +100,40 @@ def test_statics_converge_from_a_poor_first_guess(gjoa_static):
     ref = np.array(gjoa_static.release_point_m)
     got = sim.state.node_pos[sim.model.release_node]
     assert np.linalg.norm(got - ref) < 0.01
+
+
+@pytest.mark.parametrize(("residuals", "converges"), [
+    # creeping in, halving every round or two (the 500 m / 0.5 m loop chain / seed current case): rounds go on
+    ([0.03, 0.03, 0.015, 0.0066, 0.0031, 0.0023, 0.0012, 7e-4, 4.2e-4, 3.6e-4, 2.8e-4], True),
+    # stalled after the guaranteed rounds: given up at once
+    ([0.03] * 10, False),
+])
+def test_relaxation_rounds_continue_only_while_the_residual_shrinks(monkeypatch, residuals, converges):
+    """Mechanism of :func:`solve_equilibrium` step 4 with the solver stages replaced by a scripted residual
+    sequence (the numbers measured on the slowly converging case): ``RELAXATION_ROUNDS`` are always tried, then
+    more only while each cuts the best residual below ``ROUND_PROGRESS`` of it; the final error carries it."""
+    from moor_env import Simulator, compile_scene
+    from moor_env.errors import StaticsNotConverged
+    from moor_env.physics import statics
+
+    queue = [0.5, *residuals]  # the first Newton attempt from the guess fails too
+    calls = []
+
+    def scripted_newton(sim, *args):
+        calls.append(len(calls))
+        if queue:
+            residual = queue.pop(0)
+            raise StaticsNotConverged("scripted", residual)
+        return statics.StaticsReport(1, 0.0, 0.0, 1)
+
+    monkeypatch.setattr(statics, "_continuation", scripted_newton)
+    monkeypatch.setattr(statics, "relax_dynamically", lambda sim, max_time_s: max_time_s)
+    monkeypatch.setattr(statics, "first_guess", lambda sim: None)
+    sim = Simulator(compile_scene(load_scene("gjoa-500")))
+    if converges:
+        assert statics.solve_equilibrium(sim).iterations == 1
+        assert len(calls) == len(residuals) + 2 > statics.RELAXATION_ROUNDS + 1
+    else:
+        with pytest.raises(StaticsNotConverged, match="after 10 relaxation rounds") as info:
+            statics.solve_equilibrium(sim)
+        assert info.value.residual_rel == pytest.approx(0.03)
