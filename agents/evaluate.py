@@ -374,12 +374,10 @@ def evaluate_targets(targets: list[str], scenarios: list[dict[str, Any]], env: s
                      env_config: str = "anchor-release", n_jobs: int = 1, progress: bool = True,
                      optimiser: dict[str, int] | None = None, checkpoint: str = "final") -> list[dict[str, Any]]:
     """Evaluate run directories and baseline names; baselines run on ``env`` or else on the first run's env."""
-    runs, results = [], []
-    for target in targets:
-        if target not in BASELINES:
-            from agents.train_rllib import load_run_policies  # noqa: PLC0415 - it imports this module
+    from agents.train_rllib import load_run_policies  # noqa: PLC0415 - it imports this module
 
-            runs.append((target, load_run_policies(target, checkpoint)))
+    runs = [(t, load_run_policies(t, checkpoint)) for t in targets if t not in BASELINES]
+    results = []
     env_id = ENV_ALIASES.get(env, env) if env else (runs[0][1][0].env_id if runs else PLAN_ENV)
     base_cfg = runs[0][1][0].env_config if runs and not env else load_env_config(env_config)
     for target in targets:
