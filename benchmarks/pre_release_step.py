@@ -90,7 +90,8 @@ def run_episode(env, seed: int) -> dict:
     td = info.get("touchdown", {})
     return {"seed": seed, "status": info["sim_status"], "cpu_s": time.process_time() - cpu0,
             "speed_m_s": td.get("speed_m_s"), "tilt_deg": td.get("tilt_deg"), "release": release,
-            "scene_dt_s": core.sim.dt, "fallbacks": core.fallbacks, "scenario": core.scenario}
+            "scene_dt_s": core.sim.dt, "fallbacks": core.fallbacks, "scenario": core.scenario,
+            "fall_resolution": info.get("fall_resolution")}
 
 
 def _summary(rows: list[dict], case: str) -> dict:

@@ -217,12 +217,9 @@ class DiscretizationConfig(_Strict):
     integrator: Literal["symplectic_euler", "rk2", "implicit_euler"] = "symplectic_euler"
     dt_s: float | None = Field(None, gt=0.0, le=1.0, description="time step [s]; None derives it from the stability limit")
     dt_safety: float = Field(0.9, gt=0.0, le=1.0, description="fraction of the stability limit used when dt_s is derived")
-    fit_spacing_increase_m: float = Field(
-        0.0, ge=0.0, le=10000.0, description="widening of the vessel spacing before the release that a preset's "
-        "tight_line fit must cover (an env's controls can widen it during the episode) [m]")
-    fit_line_shortening_m: float = Field(
-        0.0, ge=0.0, le=10000.0, description="haul-in of the mooring line before the release that a preset's "
-        "tight_line fit must cover [m]")
+    fit_to_geometry: bool = Field(
+        True, description="fit a preset's tight_line resolution to the scene's release geometry when it is loaded; "
+        "the envs set false for the pre-release model and fit the fall's resolution at the release instead")
 
 
 class SimulationConfig(_Strict):
@@ -476,55 +473,88 @@ def apply_fidelity(data: dict[str, Any]) -> dict[str, Any]:
 TIGHT_LINE = "tight_line"  # preset entry: the resolution used where the mooring line tightens during the fall
 
 
+def tight_line_rule(fidelity: str) -> dict[str, Any] | None:
+    """The ``tight_line`` entry of a fidelity preset (``slack_below_m``, ``chord_angle_above_deg`` and the
+    discretization keys it sets), or None for a preset without one and for ``custom``."""
+    if fidelity == "custom":
+        return None
+    return fidelity_presets().get(fidelity, {}).get(TIGHT_LINE)
+
+
+TIGHT_LINE_THRESHOLDS = ("slack_below_m", "chord_angle_above_deg", "waves_above_hs_m", "moving_above_m_s")
+
+
+def tight_line_needed(rule: dict[str, Any], slack_m: float, chord_angle_deg: float, hs_m: float,
+                      line_speed_m_s: float = 0.0) -> bool:
+    """Whether the fall needs the ``tight_line`` resolution of ``rule``: the mooring line has less than
+    ``slack_below_m`` of slack at touchdown, its chord is further than ``chord_angle_above_deg`` from the vertical
+    (:func:`mooring_line_slack`), the significant wave height ``hs_m`` exceeds ``waves_above_hs_m``, or the
+    line's fastest node at the release is faster than ``moving_above_m_s`` [m/s]. The coarse resolution was
+    validated on falls from a calm loop at rest only."""
+    return (slack_m < rule["slack_below_m"] or chord_angle_deg > rule["chord_angle_above_deg"]
+            or hs_m > rule["waves_above_hs_m"] or line_speed_m_s > rule["moving_above_m_s"])
+
+
+def tight_line_keys(rule: dict[str, Any]) -> dict[str, Any]:
+    """The discretization keys of a ``tight_line`` rule (without its thresholds)."""
+    return {k: v for k, v in rule.items() if k not in TIGHT_LINE_THRESHOLDS}
+
+
 def fit_fidelity(scene: SceneConfig, data: dict[str, Any]) -> dict[str, Any] | None:
     """``data`` with its preset's ``tight_line`` resolution where the scene needs it, else None.
 
-    A preset's ``tight_line`` entry (``slack_below_m``, ``chord_angle_above_deg`` and discretization keys)
-    applies where the mooring line from the release point, when the anchor touches down, has less slack than
-    ``slack_below_m`` or a chord steeper from the vertical than ``chord_angle_above_deg``
-    (:func:`mooring_line_slack`): there the chain loop is pulled during the fall, a coarse loop goes taut too
-    early, and it carries the tilt and the snap; a slack line hanging nearly straight down does not need it.
-    Keys the scene sets explicitly still win. The geometry checked is the worst the scene can reach before its
-    release: spacing widened by ``discretization.fit_spacing_increase_m`` and the line hauled in by
-    ``discretization.fit_line_shortening_m`` (both 0 for a scripted scene; an env sets them from its control
-    limits, so that an agent tightening the line mid-episode does not fall onto a resolution measured too coarse).
+    A preset's ``tight_line`` entry (thresholds and discretization keys) applies where the mooring line from the
+    release point, when the anchor touches down, has less slack than ``slack_below_m`` or a chord steeper from
+    the vertical than ``chord_angle_above_deg`` (:func:`mooring_line_slack`), or in waves higher than
+    ``waves_above_hs_m``, or with vessel or winch moves before the release (:func:`tight_line_needed`): there the
+    chain loop is pulled or moving during the fall, a coarse loop goes taut too early, and it carries the tilt and
+    the snap; a slack line hanging nearly straight down and at rest in calm water does not need it.
+    Keys the scene sets explicitly still win. The geometry checked is the scene's at its release (after
+    ``release_time_s`` of spacing move and payout). With ``discretization.fit_to_geometry`` false nothing is
+    fitted: the envs, whose agents change the geometry before the release, run the pre-release phase on the
+    preset's own resolution and fit the fall's at the release (:mod:`moor_env.remesh`).
     """
-    name = data.get("fidelity", "default")
-    rule = fidelity_presets().get(name, {}).get(TIGHT_LINE) if name != "custom" else None
-    disc = scene.discretization
-    geometry = mooring_line_slack(scene, tip_height_m=0.0, extra_spacing_m=disc.fit_spacing_increase_m,
-                                  haul_in_m=disc.fit_line_shortening_m) if rule else None
-    if geometry is None:
+    rule = tight_line_rule(data.get("fidelity", "default"))
+    if rule is None or not scene.discretization.fit_to_geometry:
         return None
-    slack_m, angle_deg = geometry
-    if slack_m >= rule["slack_below_m"] and angle_deg <= rule["chord_angle_above_deg"]:
+    geometry = mooring_line_slack(scene, tip_height_m=0.0)
+    inst = scene.installation
+    moves = inst is not None and inst.release_time_s > 0.0 and (inst.spacing_rate_m_s or inst.payout_rate_m_s)
+    # a scripted pre-release move leaves the loop moving at the release by an amount not known before the run
+    if geometry is None or not tight_line_needed(rule, *geometry, scene.environment.sea_state.hs_m,
+                                                 math.inf if moves else 0.0):
         return None
     fitted = copy.deepcopy(data)
     disc = fitted.setdefault("discretization", {})
-    for key, value in rule.items():
-        if key not in ("slack_below_m", "chord_angle_above_deg"):
-            disc.setdefault(key, value)
+    for key, value in tight_line_keys(rule).items():
+        disc.setdefault(key, value)
     return apply_fidelity(fitted)
 
 
-def mooring_line_slack(scene: SceneConfig, tip_height_m: float, extra_spacing_m: float = 0.0,
-                       haul_in_m: float = 0.0) -> tuple[float, float] | None:
+def mooring_line_slack(scene: SceneConfig, tip_height_m: float) -> tuple[float, float] | None:
     """Slack of the mooring line (free length from the release point to the second vessel minus its chord) [m]
     and the chord's angle from the vertical [deg], with the anchor tip ``tip_height_m`` above the seabed, the
     vertical chain hanging straight above the anchor and the spacing and line length as at the release (after
-    ``release_time_s`` of spacing move and payout), the spacing further widened by ``extra_spacing_m`` and the
-    line hauled in by ``haul_in_m`` [m]; None without a mooring line.
+    ``release_time_s`` of spacing move and payout); None without a mooring line.
     """
     inst = scene.installation
     if inst is None or scene.anchor is None or not inst.components.mooring_line:
         return None
-    depth = scene.environment.water_depth_m
-    z_release = -(depth - tip_height_m - scene.anchor.length_m - inst.vertical_chain_length_m)
-    spacing = inst.vessel_spacing_m + inst.spacing_rate_m_s * inst.release_time_s + extra_spacing_m
-    rise = -(z_release + inst.fairlead_depth_m)
-    free_length = inst.mooring_line_length_m + inst.payout_rate_m_s * inst.release_time_s - haul_in_m
-    slack = free_length - inst.vertical_chain_length_m - math.hypot(spacing, rise)
-    return slack, math.degrees(math.atan2(spacing, rise))
+    return line_slack_geometry(
+        water_depth_m=scene.environment.water_depth_m, tip_height_m=tip_height_m, anchor_length_m=scene.anchor.length_m,
+        vertical_chain_m=inst.vertical_chain_length_m, fairlead_depth_m=inst.fairlead_depth_m,
+        spacing_m=inst.vessel_spacing_m + inst.spacing_rate_m_s * inst.release_time_s,
+        line_length_m=inst.mooring_line_length_m + inst.payout_rate_m_s * inst.release_time_s)
+
+
+def line_slack_geometry(water_depth_m: float, tip_height_m: float, anchor_length_m: float, vertical_chain_m: float,
+                        fairlead_depth_m: float, spacing_m: float, line_length_m: float) -> tuple[float, float]:
+    """:func:`mooring_line_slack` from plain numbers: ``line_length_m`` includes the vertical chain, ``spacing_m``
+    is the horizontal distance from the release point to the second vessel's fairlead [m]."""
+    z_release = -(water_depth_m - tip_height_m - anchor_length_m - vertical_chain_m)
+    rise = -(z_release + fairlead_depth_m)
+    slack = line_length_m - vertical_chain_m - math.hypot(spacing_m, rise)
+    return slack, math.degrees(math.atan2(spacing_m, rise))
 
 
 def check_scene_consistency(scene: SceneConfig) -> None:

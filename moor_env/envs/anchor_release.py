@@ -72,7 +72,10 @@ class AnchorReleaseEnv(gym.Env):
     lines. A step whose release action is positive releases the anchor and simulates the fall to touchdown.
     Before the release the implicit integrator steps ``control.pre_release_dt_s`` (0.1 s; waves of 7-13 s and
     slow vessel moves), the fall at the scene's own step; the accuracy of that trade is measured by
-    ``benchmarks/pre_release_step.py``.
+    ``benchmarks/pre_release_step.py``. A calm scenario with a slack loop runs on the fidelity preset's own
+    resolution (``fast``: 2 m chain) and, at the release, moves onto its ``tight_line`` resolution if the loop,
+    at the spacing and line length of that moment, will be tight at touchdown (``moor_env.remesh``); in waves, or
+    with a loop tight from the start, ``tight_line`` runs throughout (``benchmarks/remesh_at_release.py``).
 
     ## Action Space
 
@@ -200,13 +203,16 @@ class AnchorReleaseEnv(gym.Env):
     ``vectorization_mode="sync"`` or ``"async"`` give Gymnasium's vector envs of this env.
 
     ``info`` holds ``reward_terms``, ``sim_status`` (running, touchdown, time limit, diverged: ..., no touchdown
-    ...), ``t_s`` (time since the first observation [s]), ``released``, ``spacing_m``, ``max_tension_n`` per line
-    and at touchdown ``touchdown`` (speed_m_s, vertical_speed_m_s, tilt_deg, offset_m, fall_time_s,
-    chain_on_seabed_m); ``reset`` returns the ``scenario`` and where its equilibrium came from (``statics``).
+    ...), ``t_s`` (time since the first observation [s]), ``released``, ``spacing_m``, ``max_tension_n`` per line,
+    after the release ``fall_resolution`` (``preset``, ``tight_line``, or why the switch was refused) and at
+    touchdown ``touchdown`` (speed_m_s, vertical_speed_m_s, tilt_deg, offset_m, fall_time_s, chain_on_seabed_m);
+    ``reset`` returns the ``scenario`` and where its equilibrium came from (``statics``).
 
     ## Version History
 
-    * v0: initial version (issue 3): 3 actions, 27 observations, 11 reward terms.
+    * v0: initial version (issue 3): 3 actions, 27 observations, 11 reward terms. Since 2026-11-22 the fall's
+      resolution is fitted at the release rather than to the geometry the controls could reach (episodes on the
+      same seed differ from earlier ones by the resolution change).
     """
 
     metadata = {"render_modes": ["human", "rgb_array", "rgb_array_list"], "render_fps": 4}

@@ -17,7 +17,7 @@ bit for bit.
 Why no ``prange``: the threading layer available here is GNU OpenMP, which is not fork-safe (an
 ``AsyncVectorEnv`` forked after a parallel region aborts), and numba's fork-safe ``workqueue`` layer is not
 thread-safe. The batched env instead calls this GIL-free kernel from ``num_threads`` Python threads on
-disjoint groups of scenes (one numba call per group of up to 8 scenes).
+disjoint groups of scenes of about equal cost (:func:`balanced_groups`; one numba call per up to 8 scenes).
 
 The argument list mirrors ``Simulator.advance_to``; if the physics changes ``advance``'s signature, this module
 follows (see ``_slot_arrays``).
@@ -102,6 +102,30 @@ _TRACKS = [name for name, _, _ in _ARRAY_ARGS].index("tracks")
 
 def _dummy(dtype, ndim: int) -> np.ndarray:
     return np.zeros((1,) * ndim, dtype=dtype)
+
+
+def balanced_groups(items: list[tuple[int, tuple[Simulator, float, bool, float]]], n_groups: int
+                    ) -> list[list[tuple[int, tuple[Simulator, float, bool, float]]]]:
+    """Split ``(slot, job)`` items into at most ``n_groups`` groups of about equal cost (longest first, each to the
+    least loaded group).
+
+    Why: one env step of a scene that releases integrates its whole fall (hundreds of steps) while the others
+    integrate one control interval, and the step waits for the slowest thread; interleaved groups put the falls
+    wherever they happened to be. The cost estimate is steps to the end time times node slots (a fall counts its
+    whole ``max_fall_time_s``, which only makes it go first). Grouping never changes a result: every scene's
+    integration is independent of the others in the call.
+    """
+    n = min(n_groups, len(items))
+    if n <= 1:
+        return [items] if items else []
+    costs = [(t_end - sim.state.t) / dt * sim.state.node_pos.shape[0] for _, (sim, t_end, _, dt) in items]
+    groups: list[list] = [[] for _ in range(n)]
+    loads = [0.0] * n
+    for k in sorted(range(len(items)), key=lambda k: -costs[k]):
+        g = loads.index(min(loads))
+        groups[g].append(items[k])
+        loads[g] += costs[k]
+    return groups
 
 
 class BatchAdvancer:
@@ -190,13 +214,11 @@ class BatchAdvancer:
             ``{slot: (status, None)}`` or ``{slot: (None, SimulationDiverged)}`` as ``Simulator.advance_to``
             would have returned or raised.
         """
-        items = sorted(jobs.items())
-        groups = [items[g::self.num_threads] for g in range(min(self.num_threads, len(items)))]
+        groups = balanced_groups(sorted(jobs.items()), self.num_threads)
         if len(groups) <= 1 or self.pool is None:
             done = [self._run_group(g) for g in groups]
         else:
-            # interleaved groups balance scenes of similar cost; the kernel holds no GIL. The calling thread
-            # takes the first group itself rather than waiting idle.
+            # the kernel holds no GIL; the calling thread takes the first group itself rather than waiting idle
             futures = [self.pool.submit(self._run_group, g) for g in groups[1:]]
             done = [self._run_group(groups[0])] + [f.result() for f in futures]
         raw = [r for group_results, _ in done for r in group_results]

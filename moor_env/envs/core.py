@@ -23,13 +23,18 @@ from pydantic import ValidationError
 from moor_env.compile import VESSEL_INSTALLATION, VESSEL_SECOND, Model, compile_scene
 from moor_env.config import (
     SET_SHORTCUTS,
+    DiscretizationConfig,
     EnvironmentConfig,
     InstallationConfig,
     MaterialConfig,
     SceneConfig,
     check_scene_consistency,
+    line_slack_geometry,
     scene_dict,
     scene_from_dict,
+    tight_line_keys,
+    tight_line_needed,
+    tight_line_rule,
 )
 from moor_env.envs.config import SCENARIO_FIELDS, SCENARIO_RANGES, SEED_FIELD, SEED_HIGH, Choice, EnvConfig, Uniform
 from moor_env.envs.equilibria import EquilibriumCache, scene_key, statics_scene_dict
@@ -39,6 +44,7 @@ from moor_env.physics._jit import jit
 from moor_env.physics.environment import current_velocity
 from moor_env.physics.integrate import INTEGRATOR_IMPLICIT_EULER
 from moor_env.physics.vessels import track_state
+from moor_env.remesh import remesh_state
 from moor_env.simulation import Simulator
 
 # --- observation: (name, unit, offset, scale, meaning); normalised value = (raw - offset) / scale ----------------
@@ -134,7 +140,15 @@ class SceneFactory:
         if raw.get("kind", "dart_installation") != "dart_installation" or "installation" not in raw:
             raise ConfigError("scene", cfg.scene, "a dart_installation scene")
         self.base = apply_scene_overrides(raw, {**cfg.fidelity, **cfg.scene_overrides})
+        self.tight_line_rule = tight_line_rule(self.base.get("fidelity", "default"))
+        explicit = self.base.get("discretization", {})
+        tight_line = None if self.tight_line_rule is None else {
+            k: v for k, v in tight_line_keys(self.tight_line_rule).items() if k not in explicit} or None
+        self.tight_line = None  # the representative scene below supplies the geometry the rule needs
         scene = self.scene(representative_scenario(cfg))
+        self.anchor_length_m = scene.anchor.length_m
+        self.fairlead_depth_m = scene.installation.fairlead_depth_m
+        self.tight_line = tight_line
         self.chain_material = scene.installation.chain_material
         self.nominal_cd_t = float(self.base["materials"][self.chain_material]["cd_tangential"])
         comp = scene.installation.components
@@ -142,17 +156,14 @@ class SceneFactory:
             raise ConfigError("scene", cfg.scene, "a scene with wire, vertical chain and mooring line")
 
     def scene_overrides(self, scenario: dict[str, Any]) -> dict[str, Any]:
-        """Scene ``--set`` overrides of a scenario, with the geometry change its controls can reach."""
+        """Scene ``--set`` overrides of a scenario, at its pre-release resolution (:meth:`pre_release_resolution`)."""
         depth = float(scenario["water_depth_m"])
-        spacing_m = float(scenario["vessel_spacing_over_depth"]) * depth
-        length_m = float(scenario["mooring_line_length_over_depth"]) * depth
-        widen_m, haul_m = self.control_reach_m(depth, spacing_m, length_m)
         return {
-            "discretization.fit_spacing_increase_m": widen_m,
-            "discretization.fit_line_shortening_m": haul_m,
+            "discretization.fit_to_geometry": False,  # the fall's resolution is fitted at the release
+            **{f"discretization.{k}": v for k, v in self.pre_release_resolution(scenario).items()},
             "water_depth_m": depth,
-            "vessel_spacing_m": spacing_m,
-            "mooring_line_length_m": length_m,
+            "vessel_spacing_m": float(scenario["vessel_spacing_over_depth"]) * depth,
+            "mooring_line_length_m": float(scenario["mooring_line_length_over_depth"]) * depth,
             "vertical_chain_length_m": float(scenario["vertical_chain_length_m"]),
             "drop_height_m": float(scenario["drop_height_m"]),
             "current_scale": float(scenario["current_scale"]),
@@ -164,26 +175,48 @@ class SceneFactory:
             "anchor_mass_scale": float(scenario["anchor_mass_scale"]),
         }
 
-    def control_reach_m(self, depth_m: float, spacing_m: float, line_length_m: float) -> tuple[float, float]:
-        """Widest spacing increase and longest haul-in [m] the controls can make before the release.
+    def _tight_line_needed(self, depth_m: float, vertical_chain_m: float, spacing_m: float, line_length_m: float,
+                           hs_m: float, line_speed_m_s: float) -> bool:
+        geometry = line_slack_geometry(water_depth_m=depth_m, tip_height_m=0.0, anchor_length_m=self.anchor_length_m,
+                                       vertical_chain_m=vertical_chain_m, fairlead_depth_m=self.fairlead_depth_m,
+                                       spacing_m=spacing_m, line_length_m=line_length_m)
+        return tight_line_needed(self.tight_line_rule, *geometry, hs_m, line_speed_m_s)
 
-        The horizon is the longer of AnchorRelease-v0's ``control.max_pre_release_s`` and AnchorPlan-v0's
-        ``plan.positioning_s``; the DP vessel accelerates at ``spacing_accel_max_m_s2`` up to
-        ``spacing_rate_max_m_s``; both are capped by the spacing and line-length limits. The fidelity fit
-        (:func:`moor_env.config.fit_fidelity`) resolves the lines for this worst case, because the resolution
-        is fixed when the episode's equilibrium is built.
+    def pre_release_resolution(self, scenario: dict[str, Any]) -> dict[str, Any]:
+        """Discretization keys of a scenario before its release: the preset's ``tight_line`` keys where its
+        starting geometry or its waves need them (:func:`moor_env.config.tight_line_needed`), else none (the
+        preset's own resolution).
+
+        Why: a calm, slack loop held until the release falls on the coarse resolution within 0.03 m/s of the
+        fine one, at a third of the cost; the coarse pre-release phase of a loop that is tight from the start, or
+        that waves move, changed touchdown speed by 0.3 m/s median (benchmarks/remesh_at_release.py) for 15 %
+        of the episode's cost, the fall there needing the fine resolution anyway.
         """
-        ctl = self.cfg.control
-        horizon_s = max(ctl.max_pre_release_s, self.cfg.plan.positioning_s)
-        accel_s = ctl.spacing_rate_max_m_s / ctl.spacing_accel_max_m_s2
-        if horizon_s <= accel_s:
-            widen_m = 0.5 * ctl.spacing_accel_max_m_s2 * horizon_s**2
-        else:
-            widen_m = ctl.spacing_rate_max_m_s * (horizon_s - 0.5 * accel_s)
-        widen_m = min(widen_m, max(0.0, ctl.spacing_max_over_depth * depth_m - spacing_m))
-        haul_room_m = max(0.0, line_length_m - ctl.line_length_min_over_depth * depth_m)
-        haul_m = min(ctl.haul_rate_max_m_s * horizon_s, haul_room_m)
-        return float(widen_m), float(haul_m)
+        if self.tight_line is None:
+            return {}
+        depth = float(scenario["water_depth_m"])
+        tight = self._tight_line_needed(depth, float(scenario["vertical_chain_length_m"]),
+                                        float(scenario["vessel_spacing_over_depth"]) * depth,
+                                        float(scenario["mooring_line_length_over_depth"]) * depth,
+                                        float(scenario["sea_state_hs_m"]), 0.0)  # the equilibrium is at rest
+        return dict(self.tight_line) if tight else {}
+
+    def fall_resolution(self, scene: SceneConfig, spacing_m: float, line_length_m: float,
+                        line_speed_m_s: float) -> dict[str, Any] | None:
+        """Discretization keys the fall needs, or None for the preset's own resolution.
+
+        At the release, a preset with a ``tight_line`` entry (``configs/fidelity.yaml``) uses it where the
+        mooring line, at the spacing and line length (vertical chain included) [m] of that moment, will be tight
+        when the anchor touches down, where there are waves, or where its fastest node moves faster than the
+        rule's ``moving_above_m_s`` [m/s] (:func:`moor_env.config.tight_line_needed`). Keys the scene or the
+        config's overrides set explicitly win.
+        """
+        if self.tight_line is None:
+            return None
+        inst = scene.installation
+        tight = self._tight_line_needed(scene.environment.water_depth_m, inst.vertical_chain_length_m, spacing_m,
+                                        line_length_m, scene.environment.sea_state.hs_m, line_speed_m_s)
+        return dict(self.tight_line) if tight else None
 
     def scene_data(self, scenario: dict[str, Any]) -> dict[str, Any]:
         """Scene mapping of a scenario."""
@@ -356,7 +389,7 @@ class InstallationCore:
     factory : SceneFactory, optional
     """
 
-    MODEL_CACHE_ENTRIES = 256
+    MODEL_CACHE_ENTRIES = 1024  # pre-release and fall models of the 270 cached equilibria of the default grid
 
     def __init__(self, cfg: EnvConfig, cache: EquilibriumCache | None = None,
                  factory: SceneFactory | None = None) -> None:
@@ -375,19 +408,59 @@ class InstallationCore:
         self.advancer = None  # the BatchAdvancer of run_advance, made on first use
 
     # --- episode start -----------------------------------------------------------------------------------------
-    def _model(self, scene: SceneConfig, statics_data: dict[str, Any], statics: SceneConfig) -> Model:
-        """Compiled model of ``scene``: the model of the statics scene ``statics`` (cached) with the episode's sea
-        state and chain Cd_t (:func:`derive_model`), so that a new sea state costs no compile."""
-        key = scene_key(statics_data, self.cache.source_hash)
+    def _compiled(self, key: str, scene: SceneConfig) -> Model:
+        """``compile_scene(scene)`` cached under ``key`` (shared by the cores of a vector env)."""
         base = self._models.get(key)
         if base is None:
-            base = compile_scene(statics)
+            base = compile_scene(scene)
             self._models[key] = base
             while len(self._models) > self.MODEL_CACHE_ENTRIES:
                 self._models.popitem(last=False)
         else:
             self._models.move_to_end(key)
-        return derive_model(base, scene)
+        return base
+
+    def _model(self, scene: SceneConfig, statics_data: dict[str, Any], statics: SceneConfig) -> Model:
+        """Compiled model of ``scene``: the model of the statics scene ``statics`` (cached) with the episode's sea
+        state and chain Cd_t (:func:`derive_model`), so that a new sea state costs no compile."""
+        self.statics_key = scene_key(statics_data, self.cache.source_hash)
+        return derive_model(self._compiled(self.statics_key, statics), scene)
+
+    def _fall_model(self, keys: dict[str, Any]) -> Model:
+        """The episode's model at the pre-release resolution changed by the discretization ``keys``."""
+        statics = self.statics_scene
+        disc = DiscretizationConfig.model_validate({**statics.discretization.model_dump(), **keys})
+        base = self._compiled(self.statics_key + json.dumps(keys, sort_keys=True),
+                              statics.model_copy(update={"discretization": disc}))
+        return derive_model(base, self.sim.model.scene.model_copy(update={"discretization": disc}))
+
+    def _line_speed_m_s(self) -> float:
+        """Speed of the fastest free node of the vertical chain and the mooring line [m/s]."""
+        st = self.sim.state
+        lines = [self.lines["vertical_chain"], self.lines["mooring_line"]]
+        free = (st.node_i[:, L.NI_KIND] == L.NODE_FREE) & np.isin(st.node_i[:, L.NI_LINE], lines)
+        return float(np.sqrt(np.max(np.sum(st.node_vel[free] ** 2, axis=1), initial=0.0)))
+
+    def _fit_fall_resolution(self) -> None:
+        """Move the simulation onto the resolution the fall needs (:meth:`SceneFactory.fall_resolution`)."""
+        old = self.sim
+        keys = self.factory.fall_resolution(old.model.scene, self.spacing_m(), self.line_length_total_m(),
+                                            self._line_speed_m_s())
+        self.fall_resolution = "preset" if keys is None else "tight_line"
+        current = old.model.scene.discretization
+        if keys is None or all(getattr(current, k) == v for k, v in keys.items()):
+            return
+        model = self._fall_model(keys)
+        sim = Simulator(model)
+        try:
+            sim.state = remesh_state(old.state, old.model, model)
+        except ValueError as exc:  # e.g. paid out beyond the fine model's segment slots: keep the preset's
+            self.fall_resolution = f"preset (remesh refused: {exc})"
+            return
+        sim.env_f[:] = old.env_f
+        sim.vessel_mean_m[:] = old.vessel_mean_m
+        sim.tracks = old.tracks.copy()
+        self.sim = sim
 
     def start(self, scenario: dict[str, Any]) -> Advance | None:
         """Build the simulator of a scenario at its hanging equilibrium; the warm-up to run, if any.
@@ -400,6 +473,7 @@ class InstallationCore:
         cfg = self.cfg
         scene, statics_data, statics = self.factory.episode_scene(scenario)
         model = self._model(scene, statics_data, statics)
+        self.statics_scene = statics
         state, origin = self.cache.state(statics_data)
         if state.node_pos.shape != model.node_pos0.shape or state.seg_i.shape != model.seg_i.shape:
             raise StaticsNotConverged("cached equilibrium does not match the compiled scene's topology")
@@ -427,6 +501,7 @@ class InstallationCore:
         self.fallbacks = 0  # pre-release advances repeated at the scene's step (see fallback)
         self.saved_state = None
         self.released = False
+        self.fall_resolution: str | None = None
         self.done = False
         self.status = "running"
         self.flags = {"tension": False, "release_unit": False, "fibre_seabed": False}
@@ -526,6 +601,8 @@ class InstallationCore:
             sim.set_payout_rate("mooring_line", 0.0)
             self.payout_rate = 0.0
             self.spacing_rate = 0.0
+            self._fit_fall_resolution()
+            sim = self.sim
             sim.release()
             self.released = True
             sim.set_vessel_motion(t, self.max_fall_s + 1.0, np.zeros(2), ramp_s=self.ramp_s)
@@ -619,6 +696,8 @@ class InstallationCore:
             "spacing_m": self.spacing_m(),
             "max_tension_n": {name: float(st.line_f[i, L.LF_MAX_TENSION]) for name, i in self.lines.items()},
         }
+        if self.released:
+            info["fall_resolution"] = self.fall_resolution
         if self.touchdown is not None:
             info["touchdown"] = dict(self.touchdown)
         return info

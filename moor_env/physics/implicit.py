@@ -39,20 +39,29 @@ corrected acceleration; nodes set from the anchor, vessels and welded parents ar
 
 Solver: the node graph (welded nodes merged into their parent, vessel/fixed nodes prescribed, the body node
 as the root of its component) is a tree, so the block system is solved in O(N) without fill-in by block
-Gaussian elimination leaves first. The ordering is rebuilt every step (payout and release change the
-topology) by peeling leaves: each node keeps its degree and the *sums* of its neighbours' and segments'
-indices; when its degree is 1 those sums are its parent and its parent segment. A closed loop of lines is
-refused at compile time (``stability.implicit_time_step``); should one appear anyway, it is broken by lagging
-the coupling of its extra edges (their stiffness stays on the diagonal), which keeps the solve defined but is
-not stable for stiff lines.
+Gaussian elimination leaves first. The ordering is built by peeling leaves: each node keeps its degree and the
+*sums* of its neighbours' and segments' indices; when its degree is 1 those sums are its parent and its parent
+segment. It depends on the topology alone, so it is kept from one step to the next and rebuilt only where the
+caller cannot vouch for the topology (``reuse_order`` false): at the first step of every ``advance`` call
+(release, a dropped line, a restored state happen between calls) and after a step whose payout split or merged
+a segment. A kept order is the one a rebuild would give, so results are the same bit for bit (tested). A
+closed loop of lines is refused at compile time (``stability.implicit_time_step``); should one appear anyway,
+it is broken by lagging the coupling of its extra edges (their stiffness stays on the diagonal), which keeps the
+solve defined but is not stable for stiff lines.
 
 Scratch memory (no new workspace arrays, no allocation per step, ``advance``'s signature unchanged): the step
 reuses the simulator's workspace. ``node_mm`` holds the diagonal blocks and, after elimination, their
 inverses; ``node_acc`` the right-hand sides and finally dv/h (the effective acceleration of the step);
 ``pos0``/``vel0`` (the RK2 midpoint's scratch, otherwise unused) are viewed as int64 for the tree ordering and
-the active set. ``node_force``, ``node_mass``, ``node_contact`` and ``seg_tension`` keep the loads at the
-start of the step, as after an explicit step; ``node_mm`` does not hold the added mass afterwards: call
-``compute_accelerations`` (the simulator's ``evaluate_loads``) for loads, as every output already does.
+the active set, and keep the ordering between steps. ``node_force``, ``node_mass``, ``node_contact`` and
+``seg_tension`` keep the loads at the start of the step, as after an explicit step (the step evaluates them
+with ``compute_loads``: the explicit node accelerations would only be overwritten); ``node_mm`` does not hold
+the added mass afterwards: call ``compute_accelerations`` (the simulator's ``evaluate_loads``) for loads, as
+every output already does.
+
+Cost (``benchmarks/bench_implicit_step.py``, ~110 active segments): about 15 us per step with one solve, in
+roughly equal parts loads, assembly and elimination with back substitution. The kernels use ``jit_step``
+(numpy's error model): without a zero test before every division they are ~30 % faster.
 """
 
 from __future__ import annotations
@@ -61,11 +70,10 @@ import math
 
 import numpy as np
 
-from moor_env.physics._jit import jit
+from moor_env.physics._jit import jit_step
 from moor_env.physics.anchor import rotate_axis
 from moor_env.physics.environment import current_velocity
 from moor_env.physics.hydro import add_slender_added_mass
-from moor_env.physics.line import segment_axis
 from moor_env.physics.layout import (
     BF_M11,
     BF_M12,
@@ -104,6 +112,7 @@ from moor_env.physics.layout import (
     SI_B,
     SI_MAT,
 )
+from moor_env.physics.line import segment_axis
 
 # int64 views of pos0 (TR_*) and vel0 (OR_*)
 TR_DEG = 0  # remaining degree; -1 once eliminated below its parent, -2 once eliminated as a root
@@ -118,7 +127,7 @@ SET_TOLERANCE = 1e-6  # strain by which a segment must miss its predicted set be
 DRAG_SKIP = 0.02  # drag of a half segment is linearised only where h * (its damping rate) exceeds this
 
 
-@jit
+@jit_step
 def _inv_sym3(a11, a22, a33, a12, a13, a23):
     """Inverse of the symmetric 3x3 [[a11, a12, a13], [a12, a22, a23], [a13, a23, a33]] as 6 entries."""
     c11 = a22 * a33 - a23 * a23
@@ -131,7 +140,7 @@ def _inv_sym3(a11, a22, a33, a12, a13, a23):
     return c11 * inv, c22 * inv, c33 * inv, c12 * inv, c13 * inv, c23 * inv
 
 
-@jit
+@jit_step
 def _add_sym(mm, n, xx, yy, zz, xy, xz, yz):
     mm[n, 0] += xx
     mm[n, 1] += yy
@@ -141,7 +150,7 @@ def _add_sym(mm, n, xx, yy, zz, xy, xz, yz):
     mm[n, 5] += yz
 
 
-@jit
+@jit_step
 def _is_active(orow, s):
     """Bit 2s of the flag words: segment s is in the active (taut) set (the words hold 32 segments per node;
     a segment beyond that, which no compiled model has, is never active and so stays explicit)."""
@@ -150,20 +159,20 @@ def _is_active(orow, s):
     return (orow[s >> 5, OR_FLAGS] >> (2 * (s & 31))) & 1
 
 
-@jit
+@jit_step
 def _is_frozen(orow, s):
     """Bit 2s + 1: segment s has already changed set once in this step."""
     return (orow[s >> 5, OR_FLAGS] >> (2 * (s & 31) + 1)) & 1
 
 
-@jit
+@jit_step
 def _flip(orow, s):
     """Toggle the active bit of segment s and freeze it for the rest of the step."""
     orow[s >> 5, OR_FLAGS] ^= np.int64(1) << (2 * (s & 31))
     orow[s >> 5, OR_FLAGS] |= np.int64(1) << (2 * (s & 31) + 1)
 
 
-@jit
+@jit_step
 def _segment_gain(s, h, orow, node_pos, seg_i, seg_f, mat_f, seg_tension):
     """G_s = h C_s + h^2 K_s = alpha q q^T + beta I of an active segment, with its unit tangent.
 
@@ -186,7 +195,7 @@ def _segment_gain(s, h, orow, node_pos, seg_i, seg_f, mat_f, seg_tension):
     return alpha, beta, qx, qy, qz, kq, kt
 
 
-@jit
+@jit_step
 def _drag_jacobian(mm, n, h, vrx, vry, vrz, qx, qy, qz, cn, ct):
     """Add h * (-d drag / d v) of a slender piece (cn = 1/2 rho Cd_n D len, ct = 1/2 rho Cd_t pi D len)."""
     vt = vrx * qx + vry * qy + vrz * qz
@@ -203,24 +212,42 @@ def _drag_jacobian(mm, n, h, vrx, vry, vrz, qx, qy, qz, cn, ct):
              qq * qy * qz + nn * ny * nz)
 
 
-@jit
+@jit_step
+def _effective_unknown(n, body_node, node_i):
+    """The unknown that carries node n: itself (free, or the body root), its parent (welded), or -1."""
+    kind = node_i[n, NI_KIND]
+    if kind == NODE_FREE or n == body_node:
+        return n
+    if kind == NODE_WELDED:
+        p = node_i[n, NI_REF]
+        if node_i[p, NI_KIND] == NODE_FREE or p == body_node:
+            return p
+    return -1
+
+
+@jit_step
+def _init_active_set(seg_i, seg_tension, orow):
+    """Initial active set: the coupling segments taut at the start of the step."""
+    nn = orow.shape[0]
+    for w in range(min(nn, ((seg_i.shape[0] - 1) >> 5) + 1)):
+        orow[w, OR_FLAGS] = 0
+    for s in range(seg_i.shape[0]):
+        if seg_i[s, SI_ACTIVE] == 0 or not (seg_tension[s] > 0.0) or (s >> 5) >= nn:
+            continue
+        if orow[seg_i[s, SI_A], OR_EFF] != orow[seg_i[s, SI_B], OR_EFF]:
+            orow[s >> 5, OR_FLAGS] |= np.int64(1) << (2 * (s & 31))
+
+
+@jit_step
 def _setup(body_node, node_i, seg_i, seg_tension, tree, orow):
     """Effective unknown of every node, tree degrees and neighbour/segment sums, initial active set."""
     nn = node_i.shape[0]
     for n in range(nn):
-        kind = node_i[n, NI_KIND]
-        eff = -1
-        if kind == NODE_FREE or n == body_node:
-            eff = n
-        elif kind == NODE_WELDED:
-            p = node_i[n, NI_REF]
-            if node_i[p, NI_KIND] == NODE_FREE or p == body_node:
-                eff = p
-        orow[n, OR_EFF] = eff
-        orow[n, OR_FLAGS] = 0
+        orow[n, OR_EFF] = _effective_unknown(n, body_node, node_i)
         tree[n, TR_DEG] = 0
         tree[n, TR_NB] = 0
         tree[n, TR_SEG] = 0
+    _init_active_set(seg_i, seg_tension, orow)
     for s in range(seg_i.shape[0]):
         if seg_i[s, SI_ACTIVE] == 0:
             continue
@@ -228,8 +255,6 @@ def _setup(body_node, node_i, seg_i, seg_tension, tree, orow):
         eb = orow[seg_i[s, SI_B], OR_EFF]
         if ea == eb:
             continue  # both prescribed, or a welded node and its parent: internal
-        if seg_tension[s] > 0.0 and (s >> 5) < nn:
-            orow[s >> 5, OR_FLAGS] |= np.int64(1) << (2 * (s & 31))
         if ea >= 0 and eb >= 0:
             tree[ea, TR_DEG] += 1
             tree[ea, TR_NB] += eb
@@ -239,7 +264,29 @@ def _setup(body_node, node_i, seg_i, seg_tension, tree, orow):
             tree[eb, TR_SEG] += s
 
 
-@jit
+@jit_step
+def _count_unknowns(body_node, orow):
+    """Number of unknowns of an order kept from the previous step (every one of them is in the order)."""
+    nq = 0
+    for n in range(orow.shape[0]):
+        if orow[n, OR_EFF] == n and n != body_node:
+            nq += 1
+    return nq
+
+
+@jit_step
+def _prepare(reuse_order, body_node, node_i, seg_i, seg_tension, tree, orow):
+    """Elimination order (rebuilt unless ``reuse_order``: the topology is that of the previous implicit step
+    and its order is still in the scratch) and the initial active set; returns the number of unknowns ordered.
+    """
+    if not reuse_order:
+        _setup(body_node, node_i, seg_i, seg_tension, tree, orow)
+        return _order(body_node, node_i, seg_i, tree, orow)
+    _init_active_set(seg_i, seg_tension, orow)
+    return _count_unknowns(body_node, orow)
+
+
+@jit_step
 def _order(body_node, node_i, seg_i, tree, orow):
     """Leaves-first elimination order into orow[:, OR_ORDER]; returns the number of unknowns ordered."""
     nn = node_i.shape[0]
@@ -306,7 +353,7 @@ def _order(body_node, node_i, seg_i, tree, orow):
         nq += 1
 
 
-@jit
+@jit_step
 def _assemble(h, first, body_node, node_pos, node_vel, node_i, node_f, seg_i, seg_f, mat_f, env_f,
               current_profile, node_force, node_mm, node_mass, node_contact, node_acc, seg_tension, orow):
     """Diagonal blocks (node_mm) and right-hand sides (node_acc) for the current active set.
@@ -464,7 +511,7 @@ def _assemble(h, first, body_node, node_pos, node_vel, node_i, node_f, seg_i, se
             node_acc[eb, 2] -= fz
 
 
-@jit
+@jit_step
 def _eliminate(h, nq, node_pos, seg_i, seg_f, mat_f, seg_tension, node_mm, node_acc, tree, orow):
     """Forward elimination, leaves first: node_mm <- D^-1, node_acc <- y = D^-1 r; Schur terms into parents."""
     for k in range(nq):
@@ -512,7 +559,7 @@ def _eliminate(h, nq, node_pos, seg_i, seg_f, mat_f, seg_tension, node_mm, node_
         node_acc[p, 2] += gy * qz + beta * yz
 
 
-@jit
+@jit_step
 def _back_substitute(h, nq, node_pos, seg_i, seg_f, mat_f, seg_tension, node_mm, node_acc, tree, orow):
     """Root first: dv_c = y_c + D_c^-1 G dv_parent (node_acc <- dv)."""
     for k in range(nq - 1, -1, -1):
@@ -536,7 +583,7 @@ def _back_substitute(h, nq, node_pos, seg_i, seg_f, mat_f, seg_tension, node_mm,
         node_acc[c, 2] += node_mm[c, 4] * gx + node_mm[c, 5] * gy + node_mm[c, 2] * gz
 
 
-@jit
+@jit_step
 def _update_active_set(h, node_pos, node_vel, seg_i, seg_f, mat_f, node_acc, orow):
     """Predict every segment's strain and tension at the end of the step from the solved dv; a segment is
     active (taut) iff both are positive. Returns the number of segments that changed."""
@@ -582,7 +629,7 @@ def _update_active_set(h, node_pos, node_vel, seg_i, seg_f, mat_f, node_acc, oro
     return changed
 
 
-@jit
+@jit_step
 def _couple_body(h, p, body_state, node_f, body_f, body_acc, node_mm, node_acc):
     """Solve the line impulse on the anchor at node p implicitly; node_acc[p] <- dv_p.
 
@@ -663,14 +710,16 @@ def _couple_body(h, p, body_state, node_f, body_f, body_acc, node_mm, node_acc):
             cb * (ez * pfx - ex * pfz), cb * (ex * pfy - ey * pfx))
 
 
-@jit
+@jit_step
 def implicit_euler_update(h, body_active, node_pos, node_vel, body_state, node_i, node_f, seg_i, seg_f, mat_f,
                           body_f, env_f, current_profile, node_force, node_mm, node_mass, node_contact, node_acc,
-                          seg_tension, body_acc, pos0, vel0, body0):
+                          seg_tension, body_acc, pos0, vel0, body0, reuse_order):
     """Advance free nodes and the anchor by one linearly implicit step (loads already evaluated at the start).
 
-    Expects the workspace as left by ``compute_accelerations`` at (x, v) and ``body0`` = anchor state at the
-    start. Writes positions/velocities of free nodes, the anchor state and ``body_acc`` (corrected).
+    Expects the workspace as left by ``compute_loads`` at (x, v) and ``body0`` = anchor state at the start.
+    Writes positions/velocities of free nodes, the anchor state and ``body_acc`` (corrected). ``reuse_order``:
+    the caller guarantees that the topology (node kinds, segments) is that of the previous implicit step on the
+    same workspace, whose elimination order is then kept.
 
     Returns
     -------
@@ -689,8 +738,7 @@ def implicit_euler_update(h, body_active, node_pos, node_vel, body_state, node_i
             if node_i[n, NI_KIND] == NODE_BODY:
                 body_node = n
                 break
-    _setup(body_node, node_i, seg_i, seg_tension, tree, orow)
-    nq = _order(body_node, node_i, seg_i, tree, orow)
+    nq = _prepare(reuse_order, body_node, node_i, seg_i, seg_tension, tree, orow)
     c0 = c1 = c2 = c3 = c4 = c5 = 0.0
     for it in range(MAX_ACTIVE_SET_SOLVES):
         _assemble(h, it == 0, body_node, node_pos, node_vel, node_i, node_f, seg_i, seg_f, mat_f, env_f,

@@ -11,6 +11,8 @@ to a blow-up) with no Python work per step. Integrators:
 - ``implicit_euler`` (``physics/implicit.py``): linearly implicit backward Euler for the line nodes (axial
   spring-dampers, drag, seabed linearised; O(N) block elimination over the tree of lines), anchor explicit. No
   axial step limit: its step is capped for accuracy (segment rotation per step), typically 30x the explicit one.
+  ``advance`` tells it when the topology is that of its previous step (no payout split or merge, not the first
+  step of the call), so that it keeps its elimination order.
 
 A blow-up is caught every step: any node faster than the speed limit, any segment strained beyond the strain
 limit, or a non-finite value (NaN fails every comparison) ends the call with a status and the failing
@@ -21,7 +23,7 @@ from __future__ import annotations
 
 import math
 
-from moor_env.physics._jit import jit
+from moor_env.physics._jit import jit_step
 from moor_env.physics.anchor import add_point_load, body_acceleration, body_loads, body_point, rotate_axis
 from moor_env.physics.environment import current_velocity
 from moor_env.physics.hydro import solve_sym3
@@ -37,6 +39,7 @@ from moor_env.physics.layout import (
     EF_RHO,
     EF_SPEED_LIMIT,
     EF_STRAIN_LIMIT,
+    LI_NSEG,
     N_BODY_STATE,
     NF_BODY_S,
     NF_POINT_CA,
@@ -74,7 +77,7 @@ FAIL_SEGMENT = 2
 FAIL_BODY = 3
 
 
-@jit
+@jit_step
 def set_constrained_nodes(t, node_pos, node_vel, body_state, node_i, node_f, tracks, env_f):
     """Place vessel, body-attached and welded nodes from their vessel track, the anchor or their parent."""
     nn = node_i.shape[0]
@@ -100,7 +103,7 @@ def set_constrained_nodes(t, node_pos, node_vel, body_state, node_i, node_f, tra
                 node_vel[n, c] = node_vel[p, c]
 
 
-@jit
+@jit_step
 def compute_accelerations(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f, mat_f,
                           line_f, body_f, body_q, env_f, current_profile, node_force, node_mm, node_mass,
                           node_contact, node_acc, seg_tension, body_load, body_acc):
@@ -111,6 +114,29 @@ def compute_accelerations(node_pos, node_vel, body_state, body_active, node_i, n
     max_strain : float
         Largest segment strain (NaN if any load is non-finite).
     worst_segment : int
+    """
+    max_strain, worst = compute_loads(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f,
+                                      mat_f, line_f, body_f, body_q, env_f, current_profile, node_force, node_mm,
+                                      node_mass, node_contact, seg_tension, body_load, body_acc)
+    for n in range(node_i.shape[0]):
+        if node_i[n, NI_KIND] == NODE_FREE:
+            ax, ay, az = solve_sym3(node_mass[n], node_mm[n, 0], node_mm[n, 1], node_mm[n, 2], node_mm[n, 3],
+                                    node_mm[n, 4], node_mm[n, 5], node_force[n, 0], node_force[n, 1],
+                                    node_force[n, 2])
+            node_acc[n, 0] = ax
+            node_acc[n, 1] = ay
+            node_acc[n, 2] = az
+    return max_strain, worst
+
+
+@jit_step
+def compute_loads(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f, mat_f, line_f, body_f,
+                  body_q, env_f, current_profile, node_force, node_mm, node_mass, node_contact, seg_tension,
+                  body_load, body_acc):
+    """Loads (forces, masses, added masses, contact areas, tensions) of every node and the anchor's acceleration.
+
+    The free nodes' accelerations are left to the caller: the implicit step solves for them with the lines'
+    stiffness, so it skips ``compute_accelerations``' explicit solve.
     """
     rho = env_f[EF_RHO]
     g = env_f[EF_G]
@@ -170,18 +196,10 @@ def compute_accelerations(node_pos, node_vel, body_state, body_active, node_i, n
                 add_point_load(body_load, body_state, node_f[n, NF_BODY_S], node_force[n, 0], node_force[n, 1],
                                node_force[n, 2])
         body_acceleration(body_state, body_f, body_load, body_acc)
-    for n in range(nn):
-        if node_i[n, NI_KIND] == NODE_FREE:
-            ax, ay, az = solve_sym3(node_mass[n], node_mm[n, 0], node_mm[n, 1], node_mm[n, 2], node_mm[n, 3],
-                                    node_mm[n, 4], node_mm[n, 5], node_force[n, 0], node_force[n, 1],
-                                    node_force[n, 2])
-            node_acc[n, 0] = ax
-            node_acc[n, 1] = ay
-            node_acc[n, 2] = az
     return max_strain, worst
 
 
-@jit
+@jit_step
 def _kick_drift_nodes(node_i, node_pos, node_vel, node_acc, pos0, vel0, dt_v, dt_x):
     """vel = vel0 + dt_v * acc; pos = pos0 + dt_x * vel for free nodes. Returns (max speed^2, node)."""
     vmax2 = 0.0
@@ -203,7 +221,7 @@ def _kick_drift_nodes(node_i, node_pos, node_vel, node_acc, pos0, vel0, dt_v, dt
     return vmax2, worst
 
 
-@jit
+@jit_step
 def _kick_drift_body(body_state, body_acc, body0, dt_v, dt_x, wx, wy, wz, dt_rot):
     """Translational/rotational velocity update, then position and axis update of the anchor."""
     for c in range(3):
@@ -217,11 +235,14 @@ def _kick_drift_body(body_state, body_acc, body0, dt_v, dt_x, wx, wy, wz, dt_rot
     return v2
 
 
-@jit
+@jit_step
 def step(t, dt, integrator, body_active, node_pos, node_vel, body_state, node_i, node_f, seg_i, seg_f, mat_f,
          line_i, line_f, body_f, body_q, env_f, current_profile, tracks, node_force, node_mm, node_mass,
-         node_contact, node_acc, seg_tension, body_load, body_acc, pos0, vel0, body0):
+         node_contact, node_acc, seg_tension, body_load, body_acc, pos0, vel0, body0, same_topology):
     """One time step of length ``dt`` from time ``t``.
+
+    ``same_topology``: the nodes and segments are those of the previous step on this workspace (the implicit
+    step then keeps its elimination order).
 
     Returns
     -------
@@ -230,10 +251,15 @@ def step(t, dt, integrator, body_active, node_pos, node_vel, body_state, node_i,
     fail_kind, fail_index : int
         Component of a blow-up (FAIL_NODE / FAIL_SEGMENT / FAIL_BODY and its index).
     """
-    args_strain = compute_accelerations(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i,
-                                        seg_f, mat_f, line_f, body_f, body_q, env_f, current_profile, node_force,
-                                        node_mm, node_mass, node_contact, node_acc, seg_tension, body_load,
-                                        body_acc)
+    if integrator == INTEGRATOR_IMPLICIT_EULER:
+        args_strain = compute_loads(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f,
+                                    mat_f, line_f, body_f, body_q, env_f, current_profile, node_force, node_mm,
+                                    node_mass, node_contact, seg_tension, body_load, body_acc)
+    else:
+        args_strain = compute_accelerations(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i,
+                                            seg_f, mat_f, line_f, body_f, body_q, env_f, current_profile,
+                                            node_force, node_mm, node_mass, node_contact, node_acc, seg_tension,
+                                            body_load, body_acc)
     max_strain = args_strain[0]
     worst_seg = args_strain[1]
     for c in range(N_BODY_STATE):
@@ -251,7 +277,7 @@ def step(t, dt, integrator, body_active, node_pos, node_vel, body_state, node_i,
                                                            node_f, seg_i, seg_f, mat_f, body_f, env_f,
                                                            current_profile, node_force, node_mm, node_mass,
                                                            node_contact, node_acc, seg_tension, body_acc, pos0,
-                                                           vel0, body0)
+                                                           vel0, body0, same_topology)
     else:
         for n in range(node_i.shape[0]):
             for c in range(3):
@@ -318,7 +344,7 @@ def step(t, dt, integrator, body_active, node_pos, node_vel, body_state, node_i,
     return STATUS_RUNNING, FAIL_NONE, -1
 
 
-@jit
+@jit_step
 def _record(hist, hist_count, t, body_state, body_f):
     k = hist_count[0]
     if k >= hist.shape[0]:
@@ -337,7 +363,18 @@ def _record(hist, hist_count, t, body_state, body_f):
     hist_count[0] = k + 1
 
 
-@jit
+@jit_step
+def _keep_segment_counts(line_i, nseg):
+    """Whether every line still has ``nseg`` segments (no payout split or merge); ``nseg`` <- the counts."""
+    same = True
+    for line in range(line_i.shape[0]):
+        if line_i[line, LI_NSEG] != nseg[line]:
+            nseg[line] = line_i[line, LI_NSEG]
+            same = False
+    return same
+
+
+@jit_step
 def advance(t, t_end, dt, integrator, body_active, detect_touchdown, node_pos, node_vel, body_state, node_i,
             node_f, seg_i, seg_f, mat_f, line_i, line_f, body_f, body_q, env_f, current_profile, tracks,
             node_force, node_mm, node_mass, node_contact, node_acc, seg_tension, body_load, body_acc, pos0, vel0,
@@ -367,6 +404,10 @@ def advance(t, t_end, dt, integrator, body_active, detect_touchdown, node_pos, n
     set_constrained_nodes(t, node_pos, node_vel, body_state, node_i, node_f, tracks, env_f)
     # whole steps only, so that splitting a run into calls never changes the step sequence (determinism)
     h = dt
+    # the topology is trusted only from the second step of a call on: between calls the caller may release,
+    # drop a line or restore a state; within a call only a payout split or merge changes it (segment count)
+    nseg = line_i[:, LI_NSEG].copy()
+    same_topology = False
     while t < t_end - 0.5 * dt:
         if detect_touchdown:
             p0x, p0y, p0z, v0x, v0y, v0z = body_point(body_state, s_tip)
@@ -377,7 +418,8 @@ def advance(t, t_end, dt, integrator, body_active, detect_touchdown, node_pos, n
                                              node_i, node_f, seg_i, seg_f, mat_f, line_i, line_f, body_f, body_q,
                                              env_f, current_profile, tracks, node_force, node_mm, node_mass,
                                              node_contact, node_acc, seg_tension, body_load, body_acc, pos0,
-                                             vel0, body0)
+                                             vel0, body0, same_topology)
+        same_topology = _keep_segment_counts(line_i, nseg)
         n_steps += 1
         if status != STATUS_RUNNING:
             return status, t, n_steps, fail_kind, fail_index

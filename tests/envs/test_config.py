@@ -5,10 +5,8 @@ from __future__ import annotations
 import gymnasium as gym
 import pytest
 
-from moor_env.config import fidelity_presets
 from moor_env.envs import SCENARIO_FIELDS, load_env_config
 from moor_env.envs.config import env_config_names
-from moor_env.envs.core import SceneFactory, representative_scenario
 from moor_env.errors import ConfigError
 
 
@@ -72,30 +70,3 @@ def test_precompute_grid():
     assert len(discrete_grid(load_env_config("anchor-release"))) == 270
     with pytest.raises(ValueError, match="water_depth_m is continuous"):
         discrete_grid(load_env_config("anchor-release", {"scenario.water_depth_m": {"uniform": [400.0, 600.0]}}))
-
-
-def test_control_reach_follows_the_dp_and_winch_limits():
-    """Reference: constant-acceleration kinematics. 60 s at 0.05 m/s^2 up to 0.5 m/s covers 0.5 * (60 - 5) =
-    27.5 m; the winch hauls 0.3 m/s * 60 s = 18 m; both capped by the spacing and line-length limits."""
-    factory = SceneFactory(load_env_config("anchor-release"))
-    assert factory.control_reach_m(500.0, 50.0, 540.0) == pytest.approx((27.5, 18.0), abs=1e-12)
-    assert factory.control_reach_m(500.0, 240.0, 455.0) == pytest.approx((10.0, 5.0), abs=1e-12)
-    short = SceneFactory(load_env_config("anchor-release", {"control.max_pre_release_s": 4.0,
-                                                            "plan.positioning_s": 4.0}))
-    assert short.control_reach_m(500.0, 50.0, 540.0)[0] == pytest.approx(0.5 * 0.05 * 16.0, abs=1e-12)
-
-
-def test_fast_fidelity_is_fitted_to_the_geometry_the_controls_can_reach():
-    """The default geometry (spacing 0.1 h, line 1.08 h) is coarse-resolved by `fast` as a scripted scene, but an
-    agent can widen the spacing by 27.5 m and haul in 18 m before the release, which tightens the loop: the env
-    resolves it with the preset's tight_line loop chain (configs/fidelity.yaml). With controls that can barely
-    move anything, the coarse resolution stays."""
-    scenario = {"water_depth_m": 500.0, "vessel_spacing_over_depth": 0.1, "mooring_line_length_over_depth": 1.08}
-    loop_m = {}
-    for name, overrides in {"full": {}, "still": {"control.max_pre_release_s": 2.0, "plan.positioning_s": 0.0}}.items():
-        cfg = load_env_config("anchor-release", overrides)
-        factory = SceneFactory(cfg)
-        scene = factory.scene({**representative_scenario(cfg), **scenario})
-        loop_m[name] = scene.discretization.loop_chain_segment_m
-    tight = fidelity_presets()["fast"]["tight_line"]["loop_chain_segment_m"]
-    assert loop_m == {"full": tight, "still": fidelity_presets()["fast"]["loop_chain_segment_m"]}

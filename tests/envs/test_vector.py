@@ -32,9 +32,13 @@ def test_make_vec_modes(tiny, mode):
 
 # the coarse pre-release step (implicit integrator only) with its fallback path is covered by the last case
 COARSE = {"fidelity.discretization.integrator": "implicit_euler", "control.pre_release_dt_s": 0.13}
+# the `fast` preset: coarse chain before the release, every tiny fall remeshed onto its tight_line chain
+REMESH = {"fidelity": {"fidelity": "fast", "discretization.fibre_segment_m": 20.0,
+                       "discretization.wire_segment_m": 30.0}}
 
 
-@pytest.mark.parametrize(("n", "threads", "extra"), [(3, 1, {}), (3, 2, {}), (10, 2, {}), (3, 2, COARSE)])
+@pytest.mark.parametrize(("n", "threads", "extra"), [(3, 1, {}), (3, 2, {}), (10, 2, {}), (3, 2, COARSE),
+                                                     (3, 2, REMESH)])
 def test_batched_rows_equal_single_envs(tiny, n, threads, extra):  # 10 > BATCH_WIDTH: several kernel calls
     steps = 40
     overrides = {**tiny, **extra}
@@ -46,7 +50,7 @@ def test_batched_rows_equal_single_envs(tiny, n, threads, extra):  # 10 > BATCH_
     obs_b, info_b = batched.reset(seed=21)
     obs_s, info_s = sync.reset(seed=21)
     assert np.array_equal(obs_b, obs_s)
-    ended = 0
+    ended = remeshed = 0
     for act in _actions(n, steps, seed=4):
         out_b = batched.step(act)
         out_s = sync.step(act)
@@ -57,7 +61,9 @@ def test_batched_rows_equal_single_envs(tiny, n, threads, extra):  # 10 > BATCH_
             batched_values = out_b[4]["reward_terms"][term]
             assert np.array_equal(batched_values, values), (term, batched_values - values)
         ended += int(np.sum(out_b[2] | out_b[3]))
+        remeshed += sum(e.unwrapped.core.fall_resolution == "tight_line" for e in sync.envs)
     assert ended >= n  # autoresets happened on the way
+    assert (remeshed > 0) == (extra is REMESH)
     batched.close()
     sync.close()
 
@@ -136,3 +142,22 @@ def test_batched_fallback_matches_single_env(tiny):
     assert all(s.startswith("diverged") for s in out_b[4]["sim_status"])
     assert [core.fallbacks for core in batched.cores] == [1, 1]
     assert [env.unwrapped.core.fallbacks for env in sync.envs] == [1, 1]
+
+
+def test_balanced_groups_put_a_fall_apart_from_the_control_steps():
+    """Reference: longest-first list scheduling. One fall (30 s at 5 ms on 300 node slots) against seven 1 s
+    control steps at 0.1 s: the fall gets a group to itself, the control steps share the other; nothing is lost."""
+    from types import SimpleNamespace
+
+    from moor_env.envs.batch import balanced_groups
+
+    def job(t_span_s, dt_s, nodes):
+        sim = SimpleNamespace(state=SimpleNamespace(t=10.0, node_pos=np.zeros((nodes, 3))))
+        return (sim, 10.0 + t_span_s, False, dt_s)
+
+    items = [(i, job(1.0, 0.1, 190)) for i in range(7)]
+    items.insert(3, (7, job(30.0, 0.005, 300)))
+    groups = balanced_groups(items, 2)
+    assert [slot for slot, _ in groups[0]] == [7]
+    assert sorted(slot for slot, _ in groups[1]) == list(range(7))
+    assert balanced_groups(items[:1], 4) == [items[:1]] and balanced_groups([], 2) == []

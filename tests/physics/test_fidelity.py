@@ -94,11 +94,12 @@ def test_fast_fits_the_line_slack():
         assert _resolution(load_scene("gjoa-500", {**ov, "fidelity": "fast"})) == tight, ov
     explicit = load_scene("gjoa-500", {**WIDE, "fidelity": "fast", "discretization.loop_chain_segment_m": 3.0})
     assert _resolution(explicit) == (tight[0], 3.0, tight[2], tight[3])
-    # paying out before the release adds slack (and the payout is counted): 515 m + 100 s x 0.2 m/s = 535 m
+    # paying out before the release adds slack (and the payout is counted): 515 m + 100 s x 0.2 m/s = 535 m; but
+    # the line is still moving at the release, and the coarse keys were validated from a line at rest only
     paid = load_scene("gjoa-500", {"mooring_line_length_m": 515.0, "fidelity": "fast", "release_time_s": 100.0,
                                    "installation.payout_rate_m_s": 0.2})
     assert mooring_line_slack(paid, tip_height_m=0.0)[0] == pytest.approx(45.1, abs=0.1)
-    assert _resolution(paid) == coarse
+    assert _resolution(paid) == tight
 
 
 @pytest.mark.parametrize(("preset", "scene"), list(TOLERANCE))

@@ -1,0 +1,373 @@
+"""Benchmark: cost per step of the implicit Euler line integrator (``moor_env/physics/implicit.py``).
+
+Run from the repository root: ``python benchmarks/bench_implicit_step.py [--repeats 5] [--rounds 3]
+[--no-breakdown] [--baseline-root DIR]``. Writes ``benchmarks/results/bench_implicit_step.json``.
+
+``--baseline-root DIR`` times another copy of the package as well (a directory holding ``moor_env`` and
+``configs``, e.g. ``mkdir /tmp/old && git archive HEAD moor_env configs | tar -x -C /tmp/old``), in a subprocess
+per round, alternating with this tree's rounds so that both see the same machine load; the JSON then holds both,
+their ratio and the relative change of the outputs. ``--root DIR`` runs this script on another tree (what the
+baseline subprocess does).
+
+Four cases of gjoa-500 with implicit lines on meshes set explicitly (the ``fast`` preset's coarse keys, or its
+``tight_line`` keys), each from its static equilibrium:
+
+- ``hanging_waves``: the pre-release phase as the env runs it: waves (Hs 2 m, Tp 9 s, ramped in), 79 s of hanging
+  at a 0.1 s implicit step (the env's ``control.pre_release_dt_s``);
+- ``fall_fast``: release and fall to touchdown at the model's own step on the coarse ``fast`` mesh;
+- ``fall_fine``: the same on the fine ``tight_line`` mesh (1 m / 0.5 m chain, 50 m fibre, 100 m wire);
+- ``fall_fast_after_waves``: the fall on the coarse mesh after the ``hanging_waves`` phase (which is not timed
+  here): a fall that tilts, so that its outputs check more of the kernel.
+
+Each case restarts from a copy of its equilibrium state and times ``Simulator.advance_to`` alone (plain wall
+time on a shared machine: the load average is recorded; the minimum and median of ``--rounds`` x ``--repeats``
+runs are reported). The outputs (touchdown speed and tilt, and a hash of the final state) are recorded so that a change
+of the kernel can be checked to leave the results unchanged (bit for bit where the hash matches).
+
+The breakdown times each piece of one implicit step in a jitted loop at a fixed state taken from the case
+(loads ``compute_loads``; a rebuild of the elimination order, which a step pays only after a topology change or
+at the first step of an ``advance`` call; assembly with the added mass, i.e. as in a second solve; elimination
+with back substitution; active-set update) and counts the active-set solves per step over the case.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import hashlib
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from tqdm.auto import tqdm
+
+ROOT = Path(__file__).resolve().parent.parent
+TREE = Path(sys.argv[sys.argv.index("--root") + 1]).resolve() if "--root" in sys.argv else ROOT
+sys.path.insert(0, str(TREE))
+
+from _machine import machine  # noqa: E402
+
+from moor_env import load_scene, solve_statics  # noqa: E402
+from moor_env.physics import implicit as imp  # noqa: E402
+from moor_env.physics import layout as L  # noqa: E402
+from moor_env.physics._jit import jit  # noqa: E402
+
+try:
+    from moor_env.physics.integrate import compute_loads  # noqa: E402
+except ImportError:  # a tree from before compute_loads (a baseline): whole-run timings only
+    compute_loads = None
+
+RESULTS = ROOT / "benchmarks" / "results" / "bench_implicit_step.json"
+SCENE = "gjoa-500"
+# the meshes are set explicitly (not left to the fast preset's fit to the scene), so that they stay put
+COARSE = {"fidelity": "fast", "integrator": "implicit_euler", "discretization.vertical_chain_segment_m": 2.0,
+          "discretization.loop_chain_segment_m": 2.0, "discretization.fibre_segment_m": 20.0,
+          "discretization.wire_segment_m": 30.0}
+FINE = dict(COARSE, **{"discretization.vertical_chain_segment_m": 1.0, "discretization.loop_chain_segment_m": 0.5,
+                       "discretization.fibre_segment_m": 50.0, "discretization.wire_segment_m": 100.0})
+WAVES = dict(COARSE, sea_state_hs_m=2.0, sea_state_tp_s=9.0)
+HANG_DT_S = 0.1  # the env's pre-release step
+HANG_S = 79.0  # 20 s wave warm-up + 59 s of control
+PIECE_LOOPS = 3000
+
+
+class Case:
+    """A simulator at equilibrium and how to run the timed part from a copy of that state."""
+
+    def __init__(self, name: str, overrides: dict, fall: bool, hang_first: bool = False) -> None:
+        self.name = name
+        self.sim = solve_statics(load_scene(SCENE, overrides)).simulator
+        self.fall = fall
+        self.hang_first = hang_first
+        self.start = self.sim.state.copy()
+        self.t_end_s = HANG_S
+
+    def reset(self) -> None:
+        """Back to the equilibrium, vessel tracks sampled for the run."""
+        sim = self.sim
+        sim.state = self.start.copy()
+        sim.dt = sim.model.dt_s if self.fall else HANG_DT_S
+        sim.set_vessel_motion(0.0, HANG_S + 20.0, np.zeros(sim.vessel_mean_m.shape[0]))
+        if self.hang_first:
+            sim.dt = HANG_DT_S
+            sim.advance_to(HANG_S)
+            sim.dt = sim.model.dt_s
+        if self.fall:
+            sim.release()
+
+    def run(self) -> tuple[float, int]:
+        """Wall time [s] and steps of the timed part."""
+        sim = self.sim
+        self.reset()
+        t0 = time.perf_counter()
+        if self.fall:
+            _, n = sim.advance_to(sim.state.t + sim.model.scene.simulation.max_fall_time_s, detect_touchdown=True)
+        else:
+            _, n = sim.advance_to(HANG_S)
+        wall = time.perf_counter() - t0
+        self.t_end_s = sim.state.t
+        return wall, n
+
+    def outputs(self) -> dict:
+        """Touchdown speed and tilt (fall) or tip state (hanging), and a hash of the final state."""
+        sim = self.sim
+        st = sim.state
+        digest = hashlib.sha256()
+        for arr in (st.node_pos, st.node_vel, st.body_state):
+            digest.update(np.ascontiguousarray(arr).tobytes())
+        out = {"t_s": st.t, "state_sha256": digest.hexdigest()[:16]}
+        if self.fall:
+            td = sim.work.touchdown
+            out["touchdown_speed_m_s"] = float(np.linalg.norm(td[L.TD_VEL:L.TD_VEL + 3]))
+            out["touchdown_tilt_deg"] = float(math.degrees(math.acos(min(1.0, -td[L.TD_AXIS + 2]))))
+        else:
+            tip, vel = sim.tip_state()
+            out["tip_z_m"] = float(tip[2])
+            out["tip_vz_m_s"] = float(vel[2])
+        return out
+
+
+@jit
+def _loop_loads(k, node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f, mat_f, line_f,
+                body_f, body_q, env_f, current_profile, node_force, node_mm, node_mass, node_contact, seg_tension,
+                body_load, body_acc):
+    for _ in range(k):
+        compute_loads(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f, mat_f, line_f,
+                      body_f, body_q, env_f, current_profile, node_force, node_mm, node_mass, node_contact,
+                      seg_tension, body_load, body_acc)
+
+
+@jit
+def _body_node(body_active, node_i):
+    if body_active:
+        for n in range(node_i.shape[0]):
+            if node_i[n, L.NI_KIND] == L.NODE_BODY:
+                return n
+    return -1
+
+
+@jit
+def _loop_order(k, body_active, node_i, seg_i, seg_tension, pos0, vel0):
+    tree = pos0.view(np.int64)
+    orow = vel0.view(np.int64)
+    body_node = _body_node(body_active, node_i)
+    nq = 0
+    for _ in range(k):
+        imp._setup(body_node, node_i, seg_i, seg_tension, tree, orow)
+        nq = imp._order(body_node, node_i, seg_i, tree, orow)
+    return nq
+
+
+@jit
+def _loop_solve(k, stage, h, body_active, node_pos, node_vel, body_state, node_i, node_f, seg_i, seg_f, mat_f,
+                body_f, env_f, current_profile, node_force, node_mm, node_mass, node_contact, node_acc,
+                seg_tension, body_acc, pos0, vel0):
+    """``k`` solves of the first active set at a fixed state, up to ``stage`` (0 assembly, 1 + elimination and
+    back substitution, 2 + active-set update)."""
+    tree = pos0.view(np.int64)
+    orow = vel0.view(np.int64)
+    body_node = _body_node(body_active, node_i)
+    imp._setup(body_node, node_i, seg_i, seg_tension, tree, orow)
+    nq = imp._order(body_node, node_i, seg_i, tree, orow)
+    for _ in range(k):
+        imp._assemble(h, False, body_node, node_pos, node_vel, node_i, node_f, seg_i, seg_f, mat_f, env_f,
+                      current_profile, node_force, node_mm, node_mass, node_contact, node_acc, seg_tension, orow)
+        if stage >= 1:
+            imp._eliminate(h, nq, node_pos, seg_i, seg_f, mat_f, seg_tension, node_mm, node_acc, tree, orow)
+            if body_node >= 0:
+                imp._couple_body(h, body_node, body_state, node_f, body_f, body_acc, node_mm, node_acc)
+            imp._back_substitute(h, nq, node_pos, seg_i, seg_f, mat_f, seg_tension, node_mm, node_acc, tree, orow)
+        if stage >= 2:
+            imp._update_active_set(h, node_pos, node_vel, seg_i, seg_f, mat_f, node_acc, orow)
+    return nq
+
+
+def _time_loop(fn, *args) -> float:
+    """Best of 5 wall times of one call of a jitted loop [s]."""
+    best = math.inf
+    for _ in range(5):
+        t0 = time.perf_counter()
+        fn(*args)
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def piece_costs(case: Case) -> dict:
+    """Cost [us] of each piece of one implicit step at the state reached half-way through the case."""
+    sim = case.sim
+    case.reset()
+    sim.advance_to(0.5 * (sim.state.t + case.t_end_s))
+    st, m, w = sim.state, sim.model, sim.work
+    load_args = (st.node_pos, st.node_vel, st.body_state, m.body_active, st.node_i, st.node_f, st.seg_i, st.seg_f,
+                 m.mat_f, st.line_f, m.body_f, m.body_q, sim.env_f, m.current_profile, w.node_force, w.node_mm,
+                 w.node_mass, w.node_contact, w.seg_tension, w.body_load, w.body_acc)
+    k = PIECE_LOOPS
+    _loop_loads(1, *load_args)
+    out = {"loads_us": _time_loop(_loop_loads, k, *load_args) / k * 1e6}
+    saved = [a.copy() for a in (w.node_force, w.node_mm, w.node_mass, w.node_contact, w.node_acc, w.seg_tension,
+                                w.body_acc)]
+    order_args = (m.body_active, st.node_i, st.seg_i, w.seg_tension, w.pos0, w.vel0)
+    _loop_order(1, *order_args)
+    out["order_rebuild_us"] = _time_loop(_loop_order, k, *order_args) / k * 1e6
+    solve_args = (sim.dt, m.body_active, st.node_pos, st.node_vel, st.body_state, st.node_i, st.node_f, st.seg_i,
+                  st.seg_f, m.mat_f, m.body_f, sim.env_f, m.current_profile, w.node_force, w.node_mm, w.node_mass,
+                  w.node_contact, w.node_acc, w.seg_tension, w.body_acc, w.pos0, w.vel0)
+    stage_us = []
+    for stage in range(3):
+        for arr, s in zip((w.node_force, w.node_mm, w.node_mass, w.node_contact, w.node_acc, w.seg_tension,
+                           w.body_acc), saved, strict=True):
+            arr[...] = s
+        _loop_solve(1, stage, *solve_args)
+        stage_us.append(_time_loop(_loop_solve, k, stage, *solve_args) / k * 1e6)
+    out["assemble_us"] = stage_us[0]
+    out["eliminate_back_substitute_us"] = stage_us[1] - stage_us[0]
+    out["update_active_set_us"] = stage_us[2] - stage_us[1]
+    out["n_nodes_slots"] = int(st.node_i.shape[0])
+    out["n_segment_slots"] = int(st.seg_i.shape[0])
+    out["n_active_segments"] = int(np.sum(st.seg_i[:, L.SI_ACTIVE]))
+    out["n_free_nodes"] = int(np.sum(st.node_i[:, L.NI_KIND] == L.NODE_FREE))
+    return out
+
+
+def solves_per_step(case: Case) -> dict:
+    """Active-set solves per step over the case, replaying each step's loop from Python (not timed)."""
+    sim = case.sim
+    case.reset()
+    st, m, w = sim.state, sim.model, sim.work
+    end = case.t_end_s
+    counts = []
+    while st.t < end - 0.5 * sim.dt:
+        sim.evaluate_loads()
+        body_node = _body_node(m.body_active, st.node_i)
+        tree = w.pos0.view(np.int64)
+        orow = w.vel0.view(np.int64)
+        imp._setup(body_node, st.node_i, st.seg_i, w.seg_tension, tree, orow)
+        nq = imp._order(body_node, st.node_i, st.seg_i, tree, orow)
+        n = 0
+        for it in range(imp.MAX_ACTIVE_SET_SOLVES):
+            n += 1
+            imp._assemble(sim.dt, it == 0, body_node, st.node_pos, st.node_vel, st.node_i, st.node_f, st.seg_i,
+                          st.seg_f, m.mat_f, sim.env_f, m.current_profile, w.node_force, w.node_mm, w.node_mass,
+                          w.node_contact, w.node_acc, w.seg_tension, orow)
+            imp._eliminate(sim.dt, nq, st.node_pos, st.seg_i, st.seg_f, m.mat_f, w.seg_tension, w.node_mm,
+                           w.node_acc, tree, orow)
+            if body_node >= 0:
+                imp._couple_body(sim.dt, body_node, st.body_state, st.node_f, m.body_f, w.body_acc, w.node_mm,
+                                 w.node_acc)
+            imp._back_substitute(sim.dt, nq, st.node_pos, st.seg_i, st.seg_f, m.mat_f, w.seg_tension, w.node_mm,
+                                 w.node_acc, tree, orow)
+            if imp._update_active_set(sim.dt, st.node_pos, st.node_vel, st.seg_i, st.seg_f, m.mat_f, w.node_acc,
+                                      orow) == 0:
+                break
+        counts.append(n)
+        status, _ = sim.advance_to(st.t + sim.dt, detect_touchdown=case.fall)
+        if status == L.STATUS_TOUCHDOWN:
+            break
+    c = np.array(counts)
+    return {"steps": int(c.size), "mean_solves": float(c.mean()), "max_solves": int(c.max()),
+            "histogram": {str(v): int(np.sum(c == v)) for v in np.unique(c)}}
+
+
+def time_rounds(cases: list[Case], repeats: int, bar) -> tuple[dict, dict]:
+    """Wall times [s] of ``repeats`` runs of every case, interleaved so that load changes hit every case alike."""
+    walls = {case.name: [] for case in cases}
+    steps = {}
+    for _ in range(repeats):
+        for case in cases:
+            wall, steps[case.name] = case.run()
+            walls[case.name].append(wall)
+            bar.update()
+    return walls, steps
+
+
+def run_baseline(root: Path, repeats: int, out: Path) -> dict:
+    """Time the package in ``root`` with this script in a subprocess (whole runs only)."""
+    subprocess.run([sys.executable, str(Path(__file__).resolve()), "--root", str(root), "--rounds", "1",
+                    "--repeats", str(repeats), "--no-breakdown", "--out", str(out)], check=True,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return json.loads(out.read_text())["cases"]
+
+
+def compare(current: dict, baseline: list[dict]) -> dict:
+    """Baseline's best time per step, the ratio current / baseline, and the outputs' relative changes."""
+    out = {}
+    for name, r in current.items():
+        best = min(b[name]["us_per_step_min"] for b in baseline)
+        old = baseline[0][name]["outputs"]
+        changes = {k: (r["outputs"][k] - v) / abs(v) if v else r["outputs"][k] - v for k, v in old.items()
+                   if isinstance(v, float) and k != "t_s"}
+        out[name] = {"baseline_us_per_step_min": best, "ratio": r["us_per_step_min"] / best,
+                     "same_state_bits": r["outputs"]["state_sha256"] == old["state_sha256"],
+                     "output_relative_change": changes, "baseline_outputs": old}
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=5, help="timed runs of every case per round")
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--no-breakdown", action="store_true", help="time whole runs only")
+    parser.add_argument("--baseline-root", type=Path, help="another tree to time alongside (see the docstring)")
+    parser.add_argument("--baseline-label", default="", help="what the baseline tree is (kept in the JSON)")
+    parser.add_argument("--root", type=Path, help="run on another tree (used for the baseline)")
+    parser.add_argument("--out", type=Path, default=RESULTS)
+    args = parser.parse_args()
+    load_before = os.getloadavg()[0]
+    cases = [Case("hanging_waves", WAVES, fall=False), Case("fall_fast", COARSE, fall=True),
+             Case("fall_fine", FINE, fall=True), Case("fall_fast_after_waves", WAVES, fall=True, hang_first=True)]
+    results = {}
+    for case in cases:
+        case.run()  # warm-up (compile or cache load)
+    bar = tqdm(total=len(cases) * args.repeats * args.rounds, desc="timed runs", leave=False)
+    walls = {case.name: [] for case in cases}
+    baseline = []
+    for k in range(args.rounds):
+        if args.baseline_root is not None:
+            baseline.append(run_baseline(args.baseline_root, args.repeats,
+                                         args.out.with_name(args.out.stem + f"_baseline_{k}.json")))
+        round_walls, steps = time_rounds(cases, args.repeats, bar)
+        for name, w in round_walls.items():
+            walls[name] += w
+    bar.close()
+    for case in cases:
+        case.run()
+        w = np.array(walls[case.name])
+        results[case.name] = {"dt_s": case.sim.dt, "steps": steps[case.name], "wall_min_s": float(w.min()),
+                              "wall_median_s": float(np.median(w)),
+                              "us_per_step_min": float(w.min() / steps[case.name] * 1e6),
+                              "us_per_step_median": float(np.median(w) / steps[case.name] * 1e6),
+                              "outputs": case.outputs()}
+        if not args.no_breakdown:
+            results[case.name]["pieces_us"] = piece_costs(case)
+            results[case.name]["active_set_solves"] = solves_per_step(case)
+    out = {"date": datetime.datetime.now().isoformat(timespec="seconds"), "machine": machine(),
+           "load_average_1min": {"before": load_before, "after": os.getloadavg()[0]}, "repeats": args.repeats,
+           "rounds": args.rounds, "cases": results}
+    if baseline:
+        out["baseline"] = {"root": str(args.baseline_root), "label": args.baseline_label}
+        out["against_baseline"] = compare(results, baseline)
+        for k in range(args.rounds):
+            args.out.with_name(args.out.stem + f"_baseline_{k}.json").unlink()
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(out, indent=2) + "\n")
+    for name, r in results.items():
+        line = f"{name:22s} dt {r['dt_s'] * 1e3:6.2f} ms  {r['steps']:5d} steps  {r['us_per_step_min']:6.2f} us/step " \
+               f"(median {r['us_per_step_median']:6.2f})  {r['outputs']}"
+        print(line)
+        if "pieces_us" in r:
+            print("   pieces:", {k: round(v, 2) for k, v in r["pieces_us"].items()})
+            print("   solves:", r["active_set_solves"])
+        if baseline:
+            c = out["against_baseline"][name]
+            print(f"   baseline {c['baseline_us_per_step_min']:6.2f} us/step, ratio {c['ratio']:.3f}, same bits "
+                  f"{c['same_state_bits']}, output changes {c['output_relative_change']}")
+    print(f"load average {load_before:.2f} -> {out['load_average_1min']['after']:.2f}; wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
