@@ -219,7 +219,7 @@ class DiscretizationConfig(_Strict):
     dt_safety: float = Field(0.9, gt=0.0, le=1.0, description="fraction of the stability limit used when dt_s is derived")
     fit_to_geometry: bool = Field(
         True, description="fit a preset's tight_line resolution to the scene's release geometry when it is loaded; "
-        "the envs set false for the pre-release model and fit the fall's resolution at the release instead")
+        "the envs set false and choose it themselves, at the reset and again for the fall at the release")
 
 
 class SimulationConfig(_Strict):
@@ -474,7 +474,7 @@ TIGHT_LINE = "tight_line"  # preset entry: the resolution used where the mooring
 
 
 def tight_line_rule(fidelity: str) -> dict[str, Any] | None:
-    """The ``tight_line`` entry of a fidelity preset (``slack_below_m``, ``chord_angle_above_deg`` and the
+    """The ``tight_line`` entry of a fidelity preset (the thresholds of :func:`tight_line_needed` and the
     discretization keys it sets), or None for a preset without one and for ``custom``."""
     if fidelity == "custom":
         return None
@@ -511,8 +511,8 @@ def fit_fidelity(scene: SceneConfig, data: dict[str, Any]) -> dict[str, Any] | N
     the snap; a slack line hanging nearly straight down and at rest in calm water does not need it.
     Keys the scene sets explicitly still win. The geometry checked is the scene's at its release (after
     ``release_time_s`` of spacing move and payout). With ``discretization.fit_to_geometry`` false nothing is
-    fitted: the envs, whose agents change the geometry before the release, run the pre-release phase on the
-    preset's own resolution and fit the fall's at the release (:mod:`moor_env.remesh`).
+    fitted: the envs, whose agents change the geometry before the release, apply the same rule to the drawn
+    scenario at the reset and again, for the fall, at the release (:mod:`moor_env.remesh`).
     """
     rule = tight_line_rule(data.get("fidelity", "default"))
     if rule is None or not scene.discretization.fit_to_geometry:

@@ -188,9 +188,9 @@ class SceneFactory:
         preset's own resolution).
 
         Why: a calm, slack loop held until the release falls on the coarse resolution within 0.03 m/s of the
-        fine one, at a third of the cost; the coarse pre-release phase of a loop that is tight from the start, or
-        that waves move, changed touchdown speed by 0.3 m/s median (benchmarks/remesh_at_release.py) for 15 %
-        of the episode's cost, the fall there needing the fine resolution anyway.
+        fine one, at about 30 % of the cost; the coarse pre-release phase of a loop that is tight from the start,
+        or that waves move, changed touchdown speed by 0.25-0.31 m/s median (benchmarks/remesh_at_release.py)
+        for 15-18 % of the episode's cost, the fall there needing the fine resolution anyway.
         """
         if self.tight_line is None:
             return {}
