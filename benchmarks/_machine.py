@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import datetime
 import os
 import platform
 from pathlib import Path
@@ -19,3 +20,9 @@ def machine() -> str:
         except OSError:
             pass
     return f"{name or platform.machine()}, {os.cpu_count()} logical cores, {platform.system()}"
+
+
+def run_record(load_before: float) -> dict:
+    """When and where a benchmark ran: UTC date, machine, 1-minute load average before and now (it is shared)."""
+    return {"date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            "machine": machine(), "load_average_1min": {"before": load_before, "after": os.getloadavg()[0]}}

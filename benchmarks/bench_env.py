@@ -21,7 +21,6 @@ the 1-minute load average before and after is recorded with the results.
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
 import os
 import platform
@@ -36,7 +35,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import gymnasium as gym  # noqa: E402
-from _machine import machine  # noqa: E402
+from _machine import run_record  # noqa: E402
 
 import moor_env  # noqa: E402, F401 - registers the envs
 from moor_env.envs import AnchorReleaseVectorEnv  # noqa: E402
@@ -187,9 +186,7 @@ def main(argv: list[str] | None = None) -> dict:
                          "single_kernel_ms_per_transition": kernel_ms,
                          "batched_over_async_upper_bound": pick["async"]["cpu_ms_per_transition"] / kernel_ms}
     result = {
-        "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-        "machine": machine(),
-        "load_average_1min": {"before": load_before, "after": os.getloadavg()[0]},
+        **run_record(load_before),
         "python": platform.python_version(),
         "config": "anchor-release (default)",
         "scenario": SCENE,

@@ -33,7 +33,6 @@ with back substitution; active-set update) and counts the active-set solves per 
 from __future__ import annotations
 
 import argparse
-import datetime
 import hashlib
 import json
 import math
@@ -50,7 +49,7 @@ ROOT = Path(__file__).resolve().parent.parent
 TREE = Path(sys.argv[sys.argv.index("--root") + 1]).resolve() if "--root" in sys.argv else ROOT
 sys.path.insert(0, str(TREE))
 
-from _machine import machine  # noqa: E402
+from _machine import run_record  # noqa: E402
 
 from moor_env import load_scene, solve_statics  # noqa: E402
 from moor_env.physics import implicit as imp  # noqa: E402
@@ -345,9 +344,7 @@ def main() -> None:
         if not args.no_breakdown:
             results[case.name]["pieces_us"] = piece_costs(case)
             results[case.name]["active_set_solves"] = solves_per_step(case)
-    out = {"date": datetime.datetime.now().isoformat(timespec="seconds"), "machine": machine(),
-           "load_average_1min": {"before": load_before, "after": os.getloadavg()[0]}, "repeats": args.repeats,
-           "rounds": args.rounds, "cases": results}
+    out = {**run_record(load_before), "repeats": args.repeats, "rounds": args.rounds, "cases": results}
     if baseline:
         out["baseline"] = {"root": str(args.baseline_root), "label": args.baseline_label}
         out["against_baseline"] = compare(results, baseline)

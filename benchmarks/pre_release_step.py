@@ -15,7 +15,6 @@ refinement; if it moves the outcome, the reference is not converged at that leve
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
 import os
 import sys
@@ -29,7 +28,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import gymnasium as gym  # noqa: E402
-from _machine import machine  # noqa: E402
+from _machine import run_record  # noqa: E402
 
 import moor_env  # noqa: E402, F401 - registers the envs
 from moor_env.envs import core as envcore  # noqa: E402
@@ -131,9 +130,7 @@ def main(argv: list[str] | None = None) -> dict:
             rows.append(row)
     summary = {name: _summary(rows, name) for name, *_ in cases[1:]}
     result = {
-        "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-        "machine": machine(),
-        "load_average_1min": {"before": load_before, "after": os.getloadavg()[0]},
+        **run_record(load_before),
         "config": "anchor-release (default), scenarios drawn with seeds 1000..",
         "summary_abs_differences_to_reference": summary,
         "rows": rows,

@@ -34,7 +34,6 @@ is cached, the pre-release phase and the fall).
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
 import os
 import sys
@@ -48,7 +47,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import gymnasium as gym  # noqa: E402
-from _machine import machine  # noqa: E402
+from _machine import run_record  # noqa: E402
 from pre_release_step import ReferenceVariants, run_episode  # noqa: E402
 
 import moor_env  # noqa: E402, F401 - registers the envs
@@ -148,9 +147,7 @@ def main(argv: list[str] | None = None) -> dict:
     summary = {f"{part}: {name}": _summary([r for r in rows if r["part"] == part and r["case"] == name])
                for part, name, *_ in CASES}
     result = {
-        "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-        "machine": machine(),
-        "load_average_1min": {"before": load_before, "after": os.getloadavg()[0]},
+        **run_record(load_before),
         "config": "anchor-release (default), scenarios drawn with seeds 2000..; calm part with Hs 0",
         "summary_abs_differences_to_each_parts_reference": summary,
         "rows": rows,
