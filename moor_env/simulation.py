@@ -58,6 +58,21 @@ class SimState:
                         self.node_f.copy(), self.seg_i.copy(), self.seg_f.copy(), self.line_i.copy(),
                         self.line_f.copy(), self.t, self.released)
 
+    def copy_into(self, target: SimState | None) -> SimState:
+        """This state's values written into ``target``'s arrays when their shapes match (no allocation: a
+        backup taken every control step), else a new :meth:`copy`; returns the copy."""
+        if target is None or target is self or target.node_pos.shape != self.node_pos.shape \
+                or target.seg_i.shape != self.seg_i.shape or target.line_i.shape != self.line_i.shape:
+            return self.copy()
+        for name in _ARRAY_FIELDS:
+            np.copyto(getattr(target, name), getattr(self, name))
+        target.t = self.t
+        target.released = self.released
+        return target
+
+
+_ARRAY_FIELDS = ("node_pos", "node_vel", "body_state", "node_i", "node_f", "seg_i", "seg_f", "line_i", "line_f")
+
 
 class Workspace:
     """Scratch arrays for the kernels, allocated once per simulator."""
@@ -105,6 +120,7 @@ class Simulator:
         self.set_vessel_motion(0.0, 1.0, np.zeros(self.vessel_mean_m.shape[0]))
         self.release_point_m: np.ndarray | None = None
         self.release_time_s: float | None = None
+        self._loads_of: tuple[SimState, float] | None = None  # (state, t) whose loads the workspace holds
 
     # --- inputs --------------------------------------------------------------------------------------------
     def set_vessel_motion(self, t0_s: float, duration_s: float, horizontal_speed_m_s: np.ndarray,
@@ -147,11 +163,13 @@ class Simulator:
         if not self.state.line_i[info.index, L.LI_PAYOUT]:
             raise ValueError(f"line '{line}' has no winch at its top")
         self.state.line_f[info.index, L.LF_RATE] = rate_m_s
+        self._loads_of = None
 
     # --- kernels -------------------------------------------------------------------------------------------
     def evaluate_loads(self) -> tuple[float, int]:
         """Loads and accelerations at the current state (fills the workspace)."""
         st, m, w = self.state, self.model, self.work
+        self._loads_of = None  # callers (statics) move nodes in place between evaluations: no record kept
         return compute_accelerations(st.node_pos, st.node_vel, st.body_state, m.body_active, st.node_i, st.node_f,
                                      st.seg_i, st.seg_f, m.mat_f, st.line_f, m.body_f, m.body_q, self.env_f,
                                      m.current_profile, w.node_force, w.node_mm, w.node_mass, w.node_contact,
@@ -183,6 +201,17 @@ class Simulator:
             raise SimulationDiverged(t, self.component_name(fail_kind, fail_index), L.STATUS_NAMES[status])
         return status, n_steps
 
+    def note_loads_evaluated(self) -> None:
+        """Record that the workspace holds the loads of the current state: the batch kernel
+        (:func:`moor_env.envs.batch.advance_many`) evaluates them after every advance, so
+        :meth:`top_tensions_n` need not. Any change of the state in place (release, winch rate, statics) drops
+        the record; a new state object or time never matches it."""
+        self._loads_of = (self.state, self.state.t)
+
+    def _loads_current(self) -> bool:
+        key = self._loads_of
+        return key is not None and key[0] is self.state and key[1] == self.state.t
+
     def component_name(self, fail_kind: int, index: int) -> str:
         """Human name of a failing component reported by the kernel."""
         if fail_kind == FAIL_BODY:
@@ -207,6 +236,7 @@ class Simulator:
         st, m = self.state, self.model
         if st.released:
             return
+        self._loads_of = None
         if m.release_node >= 0:
             self.release_point_m = st.node_pos[m.release_node].copy()
             st.node_i[m.release_node, L.NI_KIND] = L.NODE_FREE
@@ -238,7 +268,8 @@ class Simulator:
     def top_tensions_n(self) -> dict[str, float]:
         """Load of each line on its vessel (top-segment tension plus the top half-segment's weight and drag),
         or the top segment's tension for a line ending at a connection node [N], at the current state."""
-        self.evaluate_loads()
+        if not self._loads_current():
+            self.evaluate_loads()
         out = {}
         for name, info in self.model.lines.items():
             k = self.state.line_i[info.index, L.LI_SEG_START] + self.state.line_i[info.index, L.LI_NSEG] - 1

@@ -1,26 +1,37 @@
 """Advance many simulators in one numba call: the integration of every env (single and batched).
 
-Each scene keeps its own arrays (node counts differ between scenes and change under payout), so every array
-argument of the physics entry point :func:`moor_env.physics.integrate.advance` is passed as a tuple of the
-scenes' arrays (references, no copy), and :func:`advance_many` calls ``advance`` for each listed scene in a loop,
-without the GIL. Tuples rather than numba typed lists: typed-list methods are compiled anew in every process
-(measured 3.5 s for the five array types), whereas a tuple signature is compiled once and then loaded from
-numba's disk cache. Every call uses tuples of ``BATCH_WIDTH`` (8) arrays, padded with dummies.
+Each scene keeps its own arrays (node counts differ between scenes), so the kernel cannot take one stacked
+array per argument of the physics entry point :func:`moor_env.physics.integrate.advance`. It takes one int64
+*address table* instead: for every scene and every array argument of ``advance`` (``_ARRAY_ARGS``), the
+array's data address and shape. :func:`advance_many` rebuilds each array as a view on that memory
+(``numba.carray``) and calls ``advance`` for each scene in a loop, without the GIL.
+
+Why addresses: numba unboxes every array argument on every call, about 0.24 us each with the GIL held. The
+former signature (a tuple of 8 arrays per argument, 232 arrays) spent 56-75 us per call before the first step
+(measured), as much as a whole control step of a calm scene; the table is one array, unboxed in under a
+microsecond, whatever the number of scenes. The addresses stay valid because :class:`BatchAdvancer` keeps
+every listed array referenced while its entry is in use, checks dtype, rank and C layout when it builds an
+entry, and rebuilds the entry when the simulator's state object changes (the arrays of one state are never
+replaced; ``set_vessel_motion`` may replace the vessel tracks, whose row is refreshed on every call).
+
+After each scene's advance the kernel evaluates the loads at the state reached (unless it blew up), so the
+observation's tensions (``Simulator.top_tensions_n``) need no second kernel call and that work runs on the
+batch's threads.
 
 Why the single env goes through this kernel too (with one scene): LLVM optimises ``advance`` together with its
 caller (inlining, constant arguments), and with the kernels' fastmath ``contract`` flag the fused multiply-adds
-it chooses can depend on that context. Measured: the states after 10 s of waves and the fall were bit-identical between
-``Simulator.advance_to`` and a loop kernel, but the interpolated touchdown record differed by 1 ulp. Sharing
-one compiled kernel (one specialisation: fixed tuple length) makes row i of the batched env equal the single env
-bit for bit.
+it chooses can depend on that context. Measured: the states after 10 s of waves and the fall were bit-identical
+between ``Simulator.advance_to`` and a loop kernel, but the interpolated touchdown record differed by 1 ulp.
+Sharing one compiled kernel (one specialisation, any number of scenes) makes row i of the batched env equal the
+single env bit for bit.
 
 Why no ``prange``: the threading layer available here is GNU OpenMP, which is not fork-safe (an
 ``AsyncVectorEnv`` forked after a parallel region aborts), and numba's fork-safe ``workqueue`` layer is not
 thread-safe. The batched env instead calls this GIL-free kernel from ``num_threads`` Python threads on
-disjoint groups of scenes of about equal cost (:func:`balanced_groups`; one numba call per up to 8 scenes).
+disjoint groups of scenes of about equal cost (:func:`balanced_groups`; one numba call per group).
 
 The argument list mirrors ``Simulator.advance_to``; if the physics changes ``advance``'s signature, this module
-follows (see ``_slot_arrays``).
+follows (``_ARRAY_ARGS``, ``_sources`` and the views in :func:`advance_many`).
 """
 
 from __future__ import annotations
@@ -31,13 +42,13 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numba
 import numpy as np
+from numba import types
+from numba.extending import intrinsic
 
 from moor_env.errors import SimulationDiverged
 from moor_env.physics import layout as L
-from moor_env.physics.integrate import advance
+from moor_env.physics.integrate import advance, compute_accelerations
 from moor_env.simulation import Simulator
-
-BATCH_WIDTH = 8  # scenes per kernel call (tuple length of the one compiled specialisation)
 
 # (name, dtype, ndim) of every per-scene array argument of ``advance``, in call order
 _ARRAY_ARGS: tuple[tuple[str, type, int], ...] = (
@@ -51,34 +62,96 @@ _ARRAY_ARGS: tuple[tuple[str, type, int], ...] = (
     ("pos0", np.float64, 2), ("vel0", np.float64, 2), ("body0", np.float64, 1), ("touchdown", np.float64, 1),
     ("hist", np.float64, 2), ("hist_count", np.int64, 1),
 )
+_TRACKS = [name for name, _, _ in _ARRAY_ARGS].index("tracks")
+# columns of a scene's per-call scalars (float64 table) and results (int64 / float64 tables)
+IN_T, IN_T_END, IN_DT, IN_INTEGRATOR, IN_BODY_ACTIVE, IN_DETECT = range(6)
+OUT_STATUS, OUT_STEPS, OUT_FAIL_KIND, OUT_FAIL_INDEX = range(4)
+
+
+@intrinsic
+def _address_pointer(typingctx, address):
+    """An int64 memory address as a ``void*`` (for ``numba.carray``)."""
+    if address != types.int64:
+        return None
+
+    def codegen(context, builder, signature, args):
+        return builder.inttoptr(args[0], context.get_value_type(types.voidptr))
+
+    return types.voidptr(types.int64), codegen
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _f64_1d(row):
+    return numba.carray(_address_pointer(row[0]), (row[1],), np.float64)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _f64_2d(row):
+    return numba.carray(_address_pointer(row[0]), (row[1], row[2]), np.float64)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _f64_3d(row):
+    return numba.carray(_address_pointer(row[0]), (row[1], row[2], row[3]), np.float64)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _i64_1d(row):
+    return numba.carray(_address_pointer(row[0]), (row[1],), np.int64)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _i64_2d(row):
+    return numba.carray(_address_pointer(row[0]), (row[1], row[2]), np.int64)
 
 
 @numba.njit(cache=True, nogil=True)
-def advance_many(slots, t, t_end, dt, integrator, body_active, detect, node_pos, node_vel, body_state, node_i,
-                 node_f, seg_i, seg_f, mat_f, line_i, line_f, body_f, body_q, env_f, current_profile, tracks,
-                 node_force, node_mm, node_mass, node_contact, node_acc, seg_tension, body_load, body_acc, pos0,
-                 vel0, body0, touchdown, hist, hist_count, out_status, out_t, out_steps, out_fail_kind,
-                 out_fail_index):
-    """``advance`` for the scenes listed in ``slots``; results in the ``out_*`` arrays at the slot index."""
-    for k in range(slots.shape[0]):
-        i = slots[k]
+def advance_many(scalars, addresses, out_i, out_t):
+    """``advance`` for every scene of the tables, then the loads at the state reached.
+
+    Parameters
+    ----------
+    scalars : float64[n, 6]
+        t, t_end, dt [s], integrator code, body active (0/1), detect touchdown (0/1) (``IN_*`` columns).
+    addresses : int64[n, len(_ARRAY_ARGS), 4]
+        Data address and shape of each array argument of ``advance`` (see the module docstring).
+    out_i : int64[n, 4]
+        Status, steps taken, failing component kind and index (``OUT_*`` columns).
+    out_t : float64[n]
+        Time reached [s].
+    """
+    for i in range(scalars.shape[0]):
+        a = addresses[i]
+        node_pos, node_vel, body_state = _f64_2d(a[0]), _f64_2d(a[1]), _f64_1d(a[2])
+        node_i, node_f, seg_i, seg_f = _i64_2d(a[3]), _f64_2d(a[4]), _i64_2d(a[5]), _f64_2d(a[6])
+        mat_f, line_i, line_f, body_f = _f64_2d(a[7]), _i64_2d(a[8]), _f64_2d(a[9]), _f64_1d(a[10])
+        body_q, env_f, current_profile, tracks = _f64_2d(a[11]), _f64_1d(a[12]), _f64_2d(a[13]), _f64_3d(a[14])
+        node_force, node_mm, node_mass = _f64_2d(a[15]), _f64_2d(a[16]), _f64_1d(a[17])
+        node_contact, node_acc, seg_tension = _f64_1d(a[18]), _f64_2d(a[19]), _f64_1d(a[20])
+        body_load, body_acc, pos0, vel0 = _f64_1d(a[21]), _f64_1d(a[22]), _f64_2d(a[23]), _f64_2d(a[24])
+        body0, touchdown, hist, hist_count = _f64_1d(a[25]), _f64_1d(a[26]), _f64_2d(a[27]), _i64_1d(a[28])
+        body_active = scalars[i, IN_BODY_ACTIVE] != 0.0
         status, t_reached, n_steps, fail_kind, fail_index = advance(
-            t[i], t_end[i], dt[i], integrator[i], body_active[i], detect[i], node_pos[i], node_vel[i],
-            body_state[i], node_i[i], node_f[i], seg_i[i], seg_f[i], mat_f[i], line_i[i], line_f[i], body_f[i],
-            body_q[i], env_f[i], current_profile[i], tracks[i], node_force[i], node_mm[i], node_mass[i],
-            node_contact[i], node_acc[i], seg_tension[i], body_load[i], body_acc[i], pos0[i], vel0[i], body0[i],
-            touchdown[i], hist[i], hist_count[i], 0)
-        out_status[i] = status
+            scalars[i, IN_T], scalars[i, IN_T_END], scalars[i, IN_DT], np.int64(scalars[i, IN_INTEGRATOR]),
+            body_active, scalars[i, IN_DETECT] != 0.0, node_pos, node_vel, body_state, node_i, node_f, seg_i,
+            seg_f, mat_f, line_i, line_f, body_f, body_q, env_f, current_profile, tracks, node_force, node_mm,
+            node_mass, node_contact, node_acc, seg_tension, body_load, body_acc, pos0, vel0, body0, touchdown, hist,
+            hist_count, 0)
+        if status < L.STATUS_NONFINITE:
+            compute_accelerations(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f, mat_f,
+                                  line_f, body_f, body_q, env_f, current_profile, node_force, node_mm, node_mass,
+                                  node_contact, node_acc, seg_tension, body_load, body_acc)
+        out_i[i, OUT_STATUS] = status
+        out_i[i, OUT_STEPS] = n_steps
+        out_i[i, OUT_FAIL_KIND] = fail_kind
+        out_i[i, OUT_FAIL_INDEX] = fail_index
         out_t[i] = t_reached
-        out_steps[i] = n_steps
-        out_fail_kind[i] = fail_kind
-        out_fail_index[i] = fail_index
 
 
-def _slot_arrays(sim: Simulator) -> list[np.ndarray]:
-    """The simulator's arrays in ``advance``'s argument order (checked for dtype, rank and layout)."""
+def _sources(sim: Simulator) -> dict[str, np.ndarray]:
+    """The simulator's arrays by ``advance``'s argument names."""
     st, m, w = sim.state, sim.model, sim.work
-    sources = {
+    return {
         "node_pos": st.node_pos, "node_vel": st.node_vel, "body_state": st.body_state, "node_i": st.node_i,
         "node_f": st.node_f, "seg_i": st.seg_i, "seg_f": st.seg_f, "mat_f": m.mat_f, "line_i": st.line_i,
         "line_f": st.line_f, "body_f": m.body_f, "body_q": m.body_q, "env_f": sim.env_f,
@@ -87,21 +160,34 @@ def _slot_arrays(sim: Simulator) -> list[np.ndarray]:
         "seg_tension": w.seg_tension, "body_load": w.body_load, "body_acc": w.body_acc, "pos0": w.pos0,
         "vel0": w.vel0, "body0": w.body0, "touchdown": w.touchdown, "hist": w.hist, "hist_count": w.hist_count,
     }
-    out = []
-    for name, dtype, ndim in _ARRAY_ARGS:
-        arr = sources[name]
-        if arr.dtype != dtype or arr.ndim != ndim or not arr.flags.c_contiguous:
-            raise TypeError(f"simulator array '{name}' is {arr.dtype}[{arr.ndim}d], expected C-contiguous "
-                            f"{np.dtype(dtype)}[{ndim}d]")
-        out.append(arr)
-    return out
 
 
-_TRACKS = [name for name, _, _ in _ARRAY_ARGS].index("tracks")
+def _address_row(name: str, arr: np.ndarray, dtype: type, ndim: int) -> list[int]:
+    """Address and shape of one array argument, after checking it is what the kernel will read it as."""
+    if arr.dtype != dtype or arr.ndim != ndim or not arr.flags.c_contiguous:
+        raise TypeError(f"simulator array '{name}' is {arr.dtype}[{arr.ndim}d], expected C-contiguous "
+                        f"{np.dtype(dtype)}[{ndim}d]")
+    return [arr.ctypes.data, *arr.shape, *([0] * (3 - ndim))]
 
 
-def _dummy(dtype, ndim: int) -> np.ndarray:
-    return np.zeros((1,) * ndim, dtype=dtype)
+class _Entry:
+    """A simulator's address table for one state object, with the arrays it points into (kept alive)."""
+
+    __slots__ = ("state", "arrays", "table")
+
+    def __init__(self, sim: Simulator) -> None:
+        sources = _sources(sim)
+        self.state = sim.state
+        self.arrays = [sources[name] for name, _, _ in _ARRAY_ARGS]
+        self.table = np.array([_address_row(name, sources[name], dtype, ndim) for name, dtype, ndim in _ARRAY_ARGS],
+                              dtype=np.int64)
+
+    def refresh_tracks(self, tracks: np.ndarray) -> None:
+        """Point at the simulator's current vessel tracks (``set_vessel_motion`` may replace the array)."""
+        if self.arrays[_TRACKS] is not tracks:
+            name, dtype, ndim = _ARRAY_ARGS[_TRACKS]
+            self.table[_TRACKS] = _address_row(name, tracks, dtype, ndim)
+            self.arrays[_TRACKS] = tracks
 
 
 def balanced_groups(items: list[tuple[int, tuple[Simulator, float, bool, float]]], n_groups: int
@@ -129,80 +215,58 @@ def balanced_groups(items: list[tuple[int, tuple[Simulator, float, bool, float]]
 
 
 class BatchAdvancer:
-    """Advance any number of simulators with :func:`advance_many`, ``BATCH_WIDTH`` scenes per kernel call.
+    """Advance any number of simulators with :func:`advance_many`, one kernel call per thread's group of scenes.
 
-    Every call passes tuples of exactly ``BATCH_WIDTH`` arrays (unused positions hold dummies), so the single env
-    (one scene) and the batched env (many) run one and the same compiled specialisation of the kernel: numba
-    compiles a tuple signature per tuple length, and two specialisations may contract floating-point operations
-    differently (see the module docstring).
-
-    The per-call Python work is kept small (it is paid on every env step): a simulator's argument list is built
-    and checked once and reused while its state stays the same object (only the vessel tracks are re-read, since
-    ``set_vessel_motion`` may replace them); the dummies are built once.
+    The per-call Python work is kept small (it is paid on every env step): a simulator's address table is built
+    and checked once and reused while its state stays the same object (only the vessel tracks' row is re-read,
+    since ``set_vessel_motion`` may replace them).
 
     Parameters
     ----------
     num_threads : int
-        Threads that call the kernel on interleaved groups of the scenes (1: all in the calling thread).
+        Threads that call the kernel on groups of the scenes (1: all in the calling thread).
     """
 
     def __init__(self, num_threads: int = 1) -> None:
         self.num_threads = max(1, int(num_threads))
         self.pool = ThreadPoolExecutor(self.num_threads - 1) if self.num_threads > 1 else None
-        self.dummies = [_dummy(dtype, ndim) for _, dtype, ndim in _ARRAY_ARGS]
-        self._columns: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # simulator -> (state, arrays)
+        self._entries: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # simulator -> _Entry
         self.kernel_s = 0.0  # CPU time inside the kernel, summed over threads (benchmarks/bench_env.py)
 
-    def _column(self, sim: Simulator) -> list[np.ndarray]:
-        """``advance``'s per-scene arrays of ``sim``, cached while its state is the same object (the entry holds
-        it, so a new state can never pass for an old one; the entry goes with the simulator)."""
-        entry = self._columns.get(sim)
-        if entry is None or entry[0] is not sim.state:
-            entry = (sim.state, _slot_arrays(sim))
-            self._columns[sim] = entry
-        column = entry[1]
-        tracks = sim.tracks
-        if column[_TRACKS] is not tracks:
-            if tracks.dtype != np.float64 or tracks.ndim != 3 or not tracks.flags.c_contiguous:
-                raise TypeError("simulator array 'tracks' must be C-contiguous float64[3d]")
-            column[_TRACKS] = tracks
-        return column
+    def _entry(self, sim: Simulator) -> _Entry:
+        """``sim``'s address table, cached while its state is the same object (the entry holds it, so a new state
+        can never pass for an old one; the entry goes with the simulator)."""
+        entry = self._entries.get(sim)
+        if entry is None or entry.state is not sim.state:
+            entry = _Entry(sim)
+            self._entries[sim] = entry
+        entry.refresh_tracks(sim.tracks)
+        return entry
 
-    def _call(self, chunk: list[tuple[Simulator, float, bool, float]]) -> tuple[tuple[np.ndarray, ...], float]:
-        """One kernel call on up to BATCH_WIDTH scenes; returns the output arrays and the kernel's CPU time."""
-        w = BATCH_WIDTH
-        t = np.zeros(w)
-        t_end = np.zeros(w)
-        dt = np.ones(w)
-        integ = np.zeros(w, np.int64)
-        body_active = np.zeros(w, np.bool_)
-        detect = np.zeros(w, np.bool_)
-        columns = [self.dummies] * w
-        for i, (sim, t_stop, det, step_s) in enumerate(chunk):
-            columns[i] = self._column(sim)
-            t[i] = sim.state.t
-            t_end[i] = t_stop
-            dt[i] = step_s
-            integ[i] = sim.integrator_code
-            body_active[i] = sim.model.body_active
-            detect[i] = det
-        out = (np.zeros(w, np.int64), np.zeros(w), np.zeros(w, np.int64), np.zeros(w, np.int64), np.zeros(w, np.int64))
+    def _call(self, jobs: list[tuple[Simulator, float, bool, float]]
+              ) -> tuple[np.ndarray, np.ndarray, float]:
+        """One kernel call on the scenes of ``jobs``; returns ``out_i``, ``out_t`` and the kernel's CPU time."""
+        n = len(jobs)
+        scalars = np.empty((n, 6))
+        addresses = np.empty((n, len(_ARRAY_ARGS), 4), dtype=np.int64)
+        entries = []  # keeps every array referenced until the call returns
+        for i, (sim, t_stop, detect, step_s) in enumerate(jobs):
+            entry = self._entry(sim)
+            entries.append(entry)
+            addresses[i] = entry.table
+            scalars[i] = (sim.state.t, t_stop, step_s, sim.integrator_code, sim.model.body_active, detect)
+        out_i = np.zeros((n, 4), dtype=np.int64)
+        out_t = np.zeros(n)
         t0 = time.thread_time()
-        advance_many(np.arange(len(chunk), dtype=np.int64), t, t_end, dt, integ, body_active, detect,
-                     *zip(*columns, strict=True), *out)
-        return out, time.thread_time() - t0
+        advance_many(scalars, addresses, out_i, out_t)
+        return out_i, out_t, time.thread_time() - t0
 
     def _run_group(self, group: list[tuple[int, tuple[Simulator, float, bool, float]]]
                    ) -> tuple[list[tuple[int, tuple]], float]:
-        results = []
-        kernel_s = 0.0
-        for start in range(0, len(group), BATCH_WIDTH):
-            chunk = group[start:start + BATCH_WIDTH]
-            (status, t_out, _, kind, index), seconds = self._call([job for _, job in chunk])
-            kernel_s += seconds
-            for j, (slot, _) in enumerate(chunk):
-                results.append((slot, (int(status[j]), float(t_out[j]), int(kind[j]), int(index[j]))))
-        return results, kernel_s
+        out_i, out_t, seconds = self._call([job for _, job in group])
+        results = [(slot, (int(out_i[j, OUT_STATUS]), float(out_t[j]), int(out_i[j, OUT_FAIL_KIND]),
+                           int(out_i[j, OUT_FAIL_INDEX]))) for j, (slot, _) in enumerate(group)]
+        return results, seconds
 
     def run(self, jobs: dict[int, tuple[Simulator, float, bool, float]]
             ) -> dict[int, tuple[int | None, SimulationDiverged | None]]:
@@ -221,15 +285,15 @@ class BatchAdvancer:
             # the kernel holds no GIL; the calling thread takes the first group itself rather than waiting idle
             futures = [self.pool.submit(self._run_group, g) for g in groups[1:]]
             done = [self._run_group(groups[0])] + [f.result() for f in futures]
-        raw = [r for group_results, _ in done for r in group_results]
         self.kernel_s += sum(seconds for _, seconds in done)
         results = {}
-        for slot, (status, t_reached, kind, index) in raw:
+        for slot, (status, t_reached, kind, index) in (r for group_results, _ in done for r in group_results):
             sim = jobs[slot][0]
             sim.state.t = t_reached
             if status >= L.STATUS_NONFINITE:
                 results[slot] = (None, SimulationDiverged(t_reached, sim.component_name(kind, index),
                                                           L.STATUS_NAMES[status]))
             else:
+                sim.note_loads_evaluated()
                 results[slot] = (status, None)
         return results

@@ -404,6 +404,8 @@ class InstallationCore:
         self.pending: Advance | None = None
         self.done = True
         self.saved_state = None  # state before a coarse pre-release advance (see fallback)
+        self._backup = None  # the arrays saved_state reuses step after step
+        self._summary: tuple[Any, float, tuple[float, float, float]] | None = None  # (state, t, line summary)
         self.fallbacks = 0
         self.advancer = None  # the BatchAdvancer of run_advance, made on first use
 
@@ -548,7 +550,9 @@ class InstallationCore:
         if sim.integrator_code == INTEGRATOR_IMPLICIT_EULER and self.cfg.control.pre_release_dt_s is not None:
             target = max(self.cfg.control.pre_release_dt_s, sim.dt)
         adv = Advance(t_end_s, False, phase, _even_step(t_end_s - sim.state.t, target))
-        self.saved_state = sim.state.copy() if adv.dt_s > sim.dt else None
+        self.saved_state = None
+        if adv.dt_s > sim.dt:
+            self._backup = self.saved_state = sim.state.copy_into(self._backup)
         return adv
 
     def fallback(self, adv: Advance, error: SimulationDiverged | None) -> Advance | None:
@@ -561,7 +565,7 @@ class InstallationCore:
         if error is None or self.saved_state is None or adv.dt_s <= self.sim.dt:
             return None
         self.sim.state = self.saved_state
-        self.saved_state = None
+        self.saved_state = self._backup = None  # the backup's arrays are the state now
         self.fallbacks += 1
         self.pending = Advance(adv.t_end_s, adv.detect_touchdown, adv.phase,
                                _even_step(adv.t_end_s - self.sim.state.t, self.sim.dt))
@@ -578,9 +582,16 @@ class InstallationCore:
         return float(v[VESSEL_SECOND, 0] - v[VESSEL_INSTALLATION, 0])
 
     def _mooring_line(self) -> tuple[float, float, float]:
-        """:func:`line_summary` of the mooring line with the fibre as the material."""
+        """:func:`line_summary` of the mooring line with the fibre as the material (kept for the state and time
+        it was taken at: a step asks for it three times, and the state changes only by advancing)."""
         st = self.sim.state
-        return line_summary(st.node_pos, st.seg_i, st.seg_f, st.line_i, self.lines["mooring_line"], self.fibre_mat)
+        cached = self._summary
+        if cached is not None and cached[0] is st and cached[1] == st.t:
+            return cached[2]
+        summary = line_summary(st.node_pos, st.seg_i, st.seg_f, st.line_i, self.lines["mooring_line"],
+                               self.fibre_mat)
+        self._summary = (st, st.t, summary)
+        return summary
 
     def line_length_total_m(self) -> float:
         """Mooring line including the vertical chain [m] (unstretched)."""
@@ -590,9 +601,9 @@ class InstallationCore:
         """Apply an action; the integration it needs (None when the episode ends without one)."""
         cfg = self.cfg.control
         sim = self.sim
-        a = np.clip(np.asarray(action, dtype=np.float64).reshape(3), -1.0, 1.0)
-        if not np.all(np.isfinite(a)):
-            a = np.where(np.isfinite(a), a, 0.0)  # NaN actions hold position and do not release
+        # clipped to [-1, 1]; NaN holds position and does not release
+        a = [0.0 if x != x else min(1.0, max(-1.0, x))
+             for x in np.asarray(action, dtype=np.float64).reshape(3).tolist()]
         if self.failed_at_start is not None:
             self.pending = None
             return None
@@ -799,13 +810,12 @@ class InstallationCore:
 
     def observe(self) -> np.ndarray:
         """Normalised float32 observation, clipped to +-OBS_CLIP; the last finite one if the state is not."""
-        raw = self.raw_observation()
-        obs = (raw - OBS_OFFSET) / OBS_SCALE
-        if not np.all(np.isfinite(obs)):
+        obs = (self.raw_observation() - OBS_OFFSET) / OBS_SCALE
+        if not np.isfinite(obs).all():
             return self.last_obs.copy()
-        obs = np.clip(obs, -OBS_CLIP, OBS_CLIP).astype(np.float32)
-        self.last_obs = obs.copy()
-        return obs
+        np.clip(obs, -OBS_CLIP, OBS_CLIP, out=obs)
+        self.last_obs = obs.astype(np.float32)
+        return self.last_obs.copy()
 
     # --- drawing -----------------------------------------------------------------------------------------------
     def snapshot(self) -> dict[str, Any]:

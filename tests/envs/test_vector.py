@@ -39,7 +39,7 @@ REMESH = {"fidelity": {"fidelity": "fast", "discretization.fibre_segment_m": 20.
 
 @pytest.mark.parametrize(("n", "threads", "extra"), [(3, 1, {}), (3, 2, {}), (10, 2, {}), (3, 2, COARSE),
                                                      (3, 2, REMESH)])
-def test_batched_rows_equal_single_envs(tiny, n, threads, extra):  # 10 > BATCH_WIDTH: several kernel calls
+def test_batched_rows_equal_single_envs(tiny, n, threads, extra):  # 10 on 2 threads: groups of 5 per kernel call
     steps = 40
     overrides = {**tiny, **extra}
     batched = gym.make_vec("moor_env/AnchorRelease-v0", num_envs=n, vectorization_mode="vector_entry_point",
