@@ -1,4 +1,5 @@
-"""Benchmark: AnchorRelease-v0 steps and episodes per second, single env, async vector env and batched env.
+"""Benchmark: AnchorRelease-v0 steps and episodes per second, single env, async vector env and batched env
+(threads in one process, and worker processes).
 
 Run from the repository root: ``python benchmarks/bench_env.py [--episodes 3] [--quick]``. Every env runs the
 default config (``configs/envs/anchor-release.yaml``: the ``fast`` fidelity preset, 1 s control steps, the
@@ -12,7 +13,7 @@ variant (``calm default scene``) keeps the bundled gjoa-500 scene as it is, with
 slack loop falls on the coarse resolution. A third runs the pre-release phase at the scene's own step
 (``control.pre_release_dt_s: null``) for comparison.
 
-Measured for each env: wall time, CPU time of every process involved (``/proc`` for the async workers),
+Measured for each env: wall time, CPU time of every process involved (``/proc`` for worker processes),
 transitions (env steps that are not autoresets) and episodes per second, per second per core used.
 Writes ``benchmarks/results/bench_env.json`` and prints a markdown table for the README. The machine is shared;
 the 1-minute load average before and after is recorded with the results.
@@ -112,16 +113,25 @@ def _run_vector(env, n: int, episodes_per_env: int, cpu_fn) -> dict:
     return {"episodes": done_episodes, "transitions": transitions, "wall_s": wall, "cpu_s": cpu}
 
 
+def _cpu_of(pids: list[int]):
+    """CPU seconds of this process and the worker processes ``pids``, as a function for ``_run_vector``."""
+    return lambda: time.process_time() + sum(_proc_cpu_s(p) for p in pids)
+
+
 def bench_async(n: int, episodes_per_env: int, overrides: dict) -> dict:
     env = gym.make_vec(ENV_ID, num_envs=n, vectorization_mode="async", overrides=overrides)
-    pids = [p.pid for p in env.processes]
-
-    def cpu() -> float:
-        return time.process_time() + sum(_proc_cpu_s(p) for p in pids)
-
-    out = _run_vector(env, n, episodes_per_env, cpu)
+    out = _run_vector(env, n, episodes_per_env, _cpu_of([p.pid for p in env.processes]))
     env.close()
     return {"env": "async", "num_envs": n, "cores": min(n, os.cpu_count() or 1), **out}
+
+
+def bench_workers(n: int, episodes_per_env: int, workers: int, overrides: dict) -> dict:
+    env = gym.make_vec(ENV_ID, num_envs=n, vectorization_mode="vector_entry_point", overrides=overrides,
+                       num_workers=workers)
+    out = _run_vector(env, n, episodes_per_env, _cpu_of([p.pid for p in env.processes]))
+    env.close()
+    return {"env": "batched, worker processes", "num_envs": n, "cores": min(workers, os.cpu_count() or 1),
+            "workers": workers, **out}
 
 
 def bench_batched(n: int, episodes_per_env: int, threads: int, overrides: dict) -> dict:
@@ -167,7 +177,8 @@ def main(argv: list[str] | None = None) -> dict:
                 lambda o=overrides: bench_batched(2, episodes, 2, o),
                 lambda o=overrides: bench_batched(8, episodes, 2, o),
                 lambda o=overrides: bench_batched(16, episodes, 2, o),
-                lambda o=overrides: bench_batched(8, episodes, 1, o)]
+                lambda o=overrides: bench_batched(8, episodes, 1, o),
+                lambda o=overrides: bench_workers(16, episodes, 2, o)]
         for run in runs:
             rows.append({"variant": label, **_rates(run())})
             print(rows[-1], flush=True)
@@ -177,7 +188,7 @@ def main(argv: list[str] | None = None) -> dict:
         mine = [r for r in rows if r["variant"] == label]
         pick = {"single": next(r for r in mine if r["env"] == "single"),
                 "async": max((r for r in mine if r["env"] == "async"), key=lambda r: r["transitions_per_s"])}
-        best = max(r["transitions_per_s"] for r in mine if r["env"] == "batched")
+        best = max(r["transitions_per_s"] for r in mine if r["env"].startswith("batched"))
         ratios[label] = best / pick["async"]["transitions_per_s"]  # best against best
         # with every core busy, throughput ratio = ratio of CPU per transition; the batched env runs the same
         # kernel as the single env, so it cannot spend less than the single env's kernel time per transition
@@ -205,7 +216,8 @@ def main(argv: list[str] | None = None) -> dict:
     print("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         share = f"{r['kernel_share_of_cpu']:.0%}" if "kernel_share_of_cpu" in r else "-"
-        print(f"| {r['variant']} | {r['env']} | {r['num_envs']} | {r.get('threads', r['cores'])} | "
+        procs = f"{r['workers']} procs" if "workers" in r else r.get("threads", r["cores"])
+        print(f"| {r['variant']} | {r['env']} | {r['num_envs']} | {procs} | "
               f"{r['transitions_per_s']:.1f} | {r['episodes_per_s']:.3f} | {r['episodes_per_s_per_core']:.3f} | "
               f"{r['cpu_s_per_episode']:.3f} | {r['cpu_ms_per_transition']:.3f} | {share} |")
     for label, ratio in ratios.items():

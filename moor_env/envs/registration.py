@@ -12,7 +12,7 @@ ENVS = {
         # default), taken from the env's own config so that Gymnasium's truncation and the env's truncation
         # penalty always fall on the same step
         "entry_point": "moor_env.envs.anchor_release:make_anchor_release",
-        "vector_entry_point": "moor_env.envs.vector:AnchorReleaseVectorEnv",
+        "vector_entry_point": "moor_env.envs.vector:make_vector_env",
     },
     "AnchorPlan-v0": {
         "entry_point": "moor_env.envs.anchor_plan:AnchorPlanEnv",

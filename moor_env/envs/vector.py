@@ -59,6 +59,16 @@ def merge_infos(infos: list[tuple[int, dict[str, Any]]], num_envs: int) -> dict[
     return out
 
 
+def set_spaces(env: VectorEnv, num_envs: int) -> None:
+    """The single and batched action and observation spaces and the render rate of a vector env of
+    AnchorRelease-v0 (``env.cfg`` set)."""
+    env.single_action_space = spaces.Box(-1.0, 1.0, (len(ACTION_NAMES),), np.float32)
+    env.single_observation_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (len(OBS_NAMES),), np.float32)
+    env.action_space = batch_space(env.single_action_space, num_envs)
+    env.observation_space = batch_space(env.single_observation_space, num_envs)
+    env.metadata = {**env.metadata, "render_fps": env.cfg.render.render_fps}
+
+
 class AnchorReleaseVectorEnv(VectorEnv):
     """``num_envs`` AnchorRelease-v0 episodes stepped by one numba call (next-step autoreset).
 
@@ -95,11 +105,7 @@ class AnchorReleaseVectorEnv(VectorEnv):
         limit = step_limit(self.cfg, max_episode_steps)
         for core in self.cores:
             core.max_steps = limit
-        self.single_action_space = spaces.Box(-1.0, 1.0, (len(ACTION_NAMES),), np.float32)
-        self.single_observation_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (len(OBS_NAMES),), np.float32)
-        self.action_space = batch_space(self.single_action_space, num_envs)
-        self.observation_space = batch_space(self.single_observation_space, num_envs)
-        self.metadata = {**self.metadata, "render_fps": self.cfg.render.render_fps}
+        set_spaces(self, num_envs)
         if num_threads is None:
             num_threads = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
         self.batch = BatchAdvancer(num_threads)
@@ -196,7 +202,25 @@ class AnchorReleaseVectorEnv(VectorEnv):
     def close_extras(self, **kwargs: Any) -> None:
         """Drop the simulators and the thread pool."""
         self._renderer = None
-        if self.batch.pool is not None:
-            self.batch.pool.shutdown()
-        for core in self.cores:
+        batch = getattr(self, "batch", None)  # absent when the constructor refused its arguments
+        if batch is not None and batch.pool is not None:
+            batch.pool.shutdown()
+        for core in getattr(self, "cores", []):
             core.sim = None
+
+
+def make_vector_env(num_envs: int = 1, num_workers: int = 1, **kwargs: Any) -> VectorEnv:
+    """The vector entry point of AnchorRelease-v0 (``gym.make_vec(..., num_workers=k)``).
+
+    ``num_workers`` 1 (default): :class:`AnchorReleaseVectorEnv` in this process, the kernel on ``num_threads``
+    threads. More: :class:`~moor_env.envs.sharded.ShardedVectorEnv`, the slots split over that many processes
+    (``context`` picks the start method), which also spreads the per-scene Python over the cores.
+    """
+    if num_workers == 1:
+        kwargs.pop("context", None)
+        return AnchorReleaseVectorEnv(num_envs, **kwargs)
+    if "num_threads" in kwargs:
+        raise ConfigError("num_threads", kwargs["num_threads"], "not set with num_workers > 1 (one thread each)")
+    from moor_env.envs.sharded import ShardedVectorEnv  # noqa: PLC0415 - it builds on this module
+
+    return ShardedVectorEnv(num_envs, num_workers, **kwargs)
