@@ -107,8 +107,15 @@ def main(argv: list[str] | None = None) -> dict:
     """Run every case on every episode, write the JSON and print a table."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--episodes", type=int, default=12)
-    parser.add_argument("--steps", type=float, nargs="+", default=[0.05, 0.1, 0.2], help="pre-release steps [s]")
+    parser.add_argument("--steps", type=float, nargs="+", default=None,
+                        help="pre-release steps [s] (default 0.05 0.1 0.2; with --calm 0.1 0.25 0.5)")
+    parser.add_argument("--calm", action="store_true",
+                        help="no waves (Hs 0 in every scenario); writes pre_release_step_calm.json")
     args = parser.parse_args(argv)
+    if args.steps is None:
+        args.steps = [0.1, 0.25, 0.5] if args.calm else [0.05, 0.1, 0.2]
+    sea = {"scenario.sea_state_hs_m": 0.0} if args.calm else {}
+    results = RESULTS.with_name("pre_release_step_calm.json") if args.calm else RESULTS
     load_before = os.getloadavg()[0]
     cases = [("reference", None, 0, 1.0), ("release one step later", None, 1, 1.0), ("half step", None, 0, 0.5)]
     cases += [(f"pre_release_dt_s={dt:g}", dt, 0, 1.0) for dt in args.steps]
@@ -118,7 +125,7 @@ def main(argv: list[str] | None = None) -> dict:
         ref = None
         for name, dt, delay, factor in cases:
             if name not in envs:
-                envs[name] = gym.make(ENV_ID, overrides={"control.pre_release_dt_s": dt})
+                envs[name] = gym.make(ENV_ID, overrides={"control.pre_release_dt_s": dt, **sea})
                 ReferenceVariants(envs[name].unwrapped.core, delay, factor)
             row = {"case": name, **run_episode(envs[name], seed)}
             if ref is None:
@@ -131,13 +138,13 @@ def main(argv: list[str] | None = None) -> dict:
     summary = {name: _summary(rows, name) for name, *_ in cases[1:]}
     result = {
         **run_record(load_before),
-        "config": "anchor-release (default), scenarios drawn with seeds 1000..",
+        "config": "anchor-release (default), scenarios drawn with seeds 1000.." + (", Hs 0" if args.calm else ""),
         "summary_abs_differences_to_reference": summary,
         "rows": rows,
     }
-    RESULTS.parent.mkdir(parents=True, exist_ok=True)
-    RESULTS.write_text(json.dumps(result, indent=2))
-    print(f"written {RESULTS.relative_to(ROOT)}; {result['machine']}")
+    results.parent.mkdir(parents=True, exist_ok=True)
+    results.write_text(json.dumps(result, indent=2))
+    print(f"written {results.relative_to(ROOT)}; {result['machine']}")
     print("| case | touchdown speed diff median / max [m/s] | tilt diff median / max [deg] | "
           "release vz diff median / max [m/s] | fallbacks | CPU s/episode (median) |")
     print("|---|---|---|---|---|---|")
