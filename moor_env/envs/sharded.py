@@ -5,8 +5,9 @@ every step (actions, observation, reward, info) runs on one core under the GIL; 
 scene it is about a third of the CPU per transition, and with it the threads gained little on two cores
 (benchmarks/bench_env.py). :class:`ShardedVectorEnv` gives each of ``num_workers`` processes a contiguous shard
 of the slots, each shard an ``AnchorReleaseVectorEnv`` with one kernel call per step, so both the kernel and
-the Python run on every core. One message per shard per step carries the actions out and the shard's batched
-results back (a gymnasium ``AsyncVectorEnv`` sends one per scene).
+the Python run on every core. One message per shard per step carries the actions out and the shard's results
+back (a gymnasium ``AsyncVectorEnv`` sends one per scene); the infos travel as the slots' plain dicts and are
+merged here (:func:`~moor_env.envs.vector.merge_infos`), since numpy's layout costs 25x more to pickle.
 
 Row i is the row of the in-process batched env and of the single env reset with seed ``seed + i`` (tested):
 the shards get the slots' own seeds and run the same code.
@@ -21,8 +22,7 @@ from typing import Any
 import numpy as np
 from gymnasium.vector import VectorEnv
 
-from moor_env.envs.config import load_env_config
-from moor_env.envs.vector import AnchorReleaseVectorEnv, set_spaces
+from moor_env.envs.vector import AnchorReleaseVectorEnv, init_vector_env, merge_infos
 from moor_env.errors import ConfigError
 
 CLOSE_TIMEOUT_S = 10.0
@@ -44,10 +44,10 @@ def _serve(conn, num_envs: int, cfg, max_episode_steps: int | None, render_mode:
         while True:
             command, argument = conn.recv()
             if command == "step":
-                conn.send(("ok", env.step(argument)))
+                conn.send(("ok", env.step_slots(argument)))
             elif command == "reset":
                 seeds, options = argument
-                conn.send(("ok", env.reset(seed=seeds, options=options)))
+                conn.send(("ok", env.reset_slots(seed=seeds, options=options)))
             elif command == "render":
                 conn.send(("ok", env.render()))
             elif command == "close":
@@ -60,34 +60,6 @@ def _serve(conn, num_envs: int, cfg, max_episode_steps: int | None, render_mode:
         if env is not None:
             env.close()
         conn.close()
-
-
-def concat_infos(parts: list[dict[str, Any]], sizes: list[int]) -> dict[str, Any]:
-    """The vector ``info`` of all slots from the shards' vector infos (Gymnasium's layout: a value array and a
-    ``_key`` mask per key, nested dicts recursively), equal to the info one batched env of all slots returns."""
-    n = sum(sizes)
-    offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
-    keys: dict[str, None] = {}
-    for part in parts:
-        keys.update(dict.fromkeys(k for k in part if not (k.startswith("_") and k[1:] in part)))
-    out: dict[str, Any] = {}
-    for key in keys:
-        present = [(k, part[key]) for k, part in enumerate(parts) if key in part]
-        first = present[0][1]
-        if isinstance(first, dict):
-            out[key] = concat_infos([part.get(key, {}) for part in parts], sizes)
-        else:
-            array = (np.full(n, fill_value=None, dtype=object) if first.dtype == object
-                     else np.zeros((n, *first.shape[1:]), dtype=first.dtype))
-            for k, value in present:
-                array[offsets[k]:offsets[k + 1]] = value
-            out[key] = array
-        mask = np.zeros(n, dtype=np.bool_)
-        for k, part in enumerate(parts):
-            if f"_{key}" in part:
-                mask[offsets[k]:offsets[k + 1]] = part[f"_{key}"]
-        out[f"_{key}"] = mask
-    return out
 
 
 class ShardedVectorEnv(VectorEnv):
@@ -115,18 +87,11 @@ class ShardedVectorEnv(VectorEnv):
                  render_mode: str | None = None, context: str | None = None) -> None:
         self.connections: list = []
         self.processes: list = []
-        if num_envs < 1:
-            raise ConfigError("num_envs", num_envs, ">= 1")
         if num_workers < 1:
             raise ConfigError("num_workers", num_workers, ">= 1")
-        if render_mode not in (None, "rgb_array"):
-            raise ConfigError("render_mode", render_mode, "None or rgb_array")
-        self.cfg = load_env_config(config, overrides)
-        self.num_envs = num_envs
-        self.render_mode = render_mode
+        init_vector_env(self, num_envs, config, overrides, render_mode)
         self.bounds = _shard_bounds(num_envs, min(num_workers, num_envs))
         self.sizes = [b - a for a, b in self.bounds]
-        set_spaces(self, num_envs)
         self._obs = np.zeros(self.observation_space.shape, dtype=np.float32)
         ctx = mp.get_context(context)
         for size in self.sizes:
@@ -139,17 +104,16 @@ class ShardedVectorEnv(VectorEnv):
             self.processes.append(process)
         self._collect()  # each worker reports that its env was made
 
-    def _collect(self) -> list[Any]:
-        results = []
-        errors = []
-        for k, conn in enumerate(self.connections):
-            status, value = conn.recv()
-            if status == "error":
-                errors.append(f"worker {k} (slots {self.bounds[k][0]}..{self.bounds[k][1] - 1}):\n{value}")
-            results.append(value)
+    def _collect(self, workers=None) -> list[Any]:
+        """The replies of ``workers`` (default: all), in order; a worker's failure is raised here with its
+        traceback."""
+        workers = range(len(self.connections)) if workers is None else workers
+        replies = [(k, *self.connections[k].recv()) for k in workers]
+        errors = [f"worker {k} (slots {self.bounds[k][0]}..{self.bounds[k][1] - 1}):\n{value}"
+                  for k, status, value in replies if status == "error"]
         if errors:
             raise RuntimeError("a ShardedVectorEnv worker failed:\n" + "\n".join(errors))
-        return results
+        return [value for _, _, value in replies]
 
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None):
         """Reset every slot (or those in ``options["reset_mask"]``); seed i is ``seed + i`` for an int seed."""
@@ -169,34 +133,23 @@ class ShardedVectorEnv(VectorEnv):
             if mask[a:b].any():
                 self.connections[k].send(("reset", (seeds[a:b], {**options, "reset_mask": mask[a:b]})))
                 active.append(k)
-        results = [self.connections[k].recv() for k in active]
-        self._raise_errors(results, active)
-        parts: list[dict[str, Any]] = [{} for _ in self.bounds]
-        for k, (_, (shard_obs, info)) in zip(active, results, strict=True):
+        infos = []
+        for k, (shard_obs, shard_infos) in zip(active, self._collect(active), strict=True):
             a, b = self.bounds[k]
             self._obs[a:b] = shard_obs
-            parts[k] = info
-        obs = self._obs.copy()
-        return obs, concat_infos(parts, self.sizes)
+            infos += [(a + i, info) for i, info in shard_infos]
+        return self._obs.copy(), merge_infos(infos, n)
 
     def step(self, actions):
         """Step every slot; a slot that ended on the previous step is reset instead (next-step autoreset)."""
         actions = np.asarray(actions, dtype=np.float32).reshape(self.num_envs, -1)
         for conn, (a, b) in zip(self.connections, self.bounds, strict=True):
             conn.send(("step", actions[a:b]))
-        results = [conn.recv() for conn in self.connections]
-        self._raise_errors(results, range(len(self.connections)))
-        obs, rewards, terminated, truncated, infos = zip(*(value for _, value in results), strict=True)
-        obs = np.concatenate(obs)
-        self._obs[...] = obs
-        return (obs, np.concatenate(rewards), np.concatenate(terminated), np.concatenate(truncated),
-                concat_infos(list(infos), self.sizes))
-
-    def _raise_errors(self, results: list[tuple[str, Any]], workers) -> None:
-        errors = [f"worker {k}:\n{value}" for k, (status, value) in zip(workers, results, strict=True)
-                  if status == "error"]
-        if errors:
-            raise RuntimeError("a ShardedVectorEnv worker failed:\n" + "\n".join(errors))
+        obs, rewards, terminated, truncated, shard_infos = zip(*self._collect(), strict=True)
+        infos = [(a + i, info) for (a, _), pairs in zip(self.bounds, shard_infos, strict=True) for i, info in pairs]
+        self._obs[...] = np.concatenate(obs)
+        return (self._obs.copy(), np.concatenate(rewards), np.concatenate(terminated), np.concatenate(truncated),
+                merge_infos(infos, self.num_envs))
 
     def render(self):
         """One frame per slot (``render_mode="rgb_array"``)."""

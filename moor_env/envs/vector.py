@@ -59,9 +59,17 @@ def merge_infos(infos: list[tuple[int, dict[str, Any]]], num_envs: int) -> dict[
     return out
 
 
-def set_spaces(env: VectorEnv, num_envs: int) -> None:
-    """The single and batched action and observation spaces and the render rate of a vector env of
-    AnchorRelease-v0 (``env.cfg`` set)."""
+def init_vector_env(env: VectorEnv, num_envs: int, config, overrides: dict[str, Any] | None,
+                    render_mode: str | None) -> None:
+    """What every AnchorRelease-v0 vector env sets first: checked ``num_envs`` and ``render_mode``, the
+    validated config (``env.cfg``), the single and batched spaces and the render rate."""
+    if num_envs < 1:
+        raise ConfigError("num_envs", num_envs, ">= 1")
+    if render_mode not in (None, "rgb_array"):
+        raise ConfigError("render_mode", render_mode, "None or rgb_array")
+    env.cfg = load_env_config(config, overrides)
+    env.num_envs = num_envs
+    env.render_mode = render_mode
     env.single_action_space = spaces.Box(-1.0, 1.0, (len(ACTION_NAMES),), np.float32)
     env.single_observation_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (len(OBS_NAMES),), np.float32)
     env.action_space = batch_space(env.single_action_space, num_envs)
@@ -91,13 +99,7 @@ class AnchorReleaseVectorEnv(VectorEnv):
     def __init__(self, num_envs: int = 1, config: str | Path | dict | EnvConfig = "anchor-release",
                  overrides: dict[str, Any] | None = None, max_episode_steps: int | None = None,
                  render_mode: str | None = None, num_threads: int | None = None) -> None:
-        if num_envs < 1:
-            raise ConfigError("num_envs", num_envs, ">= 1")
-        if render_mode not in (None, "rgb_array"):
-            raise ConfigError("render_mode", render_mode, "None or rgb_array")
-        self.cfg = load_env_config(config, overrides)
-        self.num_envs = num_envs
-        self.render_mode = render_mode
+        init_vector_env(self, num_envs, config, overrides, render_mode)
         self.num_threads = num_threads
         factory = SceneFactory(self.cfg)
         cache = EquilibriumCache(self.cfg.statics)
@@ -105,7 +107,6 @@ class AnchorReleaseVectorEnv(VectorEnv):
         limit = step_limit(self.cfg, max_episode_steps)
         for core in self.cores:
             core.max_steps = limit
-        set_spaces(self, num_envs)
         if num_threads is None:
             num_threads = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
         self.batch = BatchAdvancer(num_threads)
@@ -136,6 +137,12 @@ class AnchorReleaseVectorEnv(VectorEnv):
     # --- API -----------------------------------------------------------------------------------------------------
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None):
         """Reset every slot (or those in ``options["reset_mask"]``); seed i is ``seed + i`` for an int seed."""
+        obs, infos = self.reset_slots(seed=seed, options=options)
+        return obs, merge_infos(infos, self.num_envs)
+
+    def reset_slots(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
+                    ) -> tuple[np.ndarray, list[tuple[int, dict[str, Any]]]]:
+        """:meth:`reset` with the infos as ``(slot, info)`` pairs of the slots reset (merged by the caller)."""
         n = self.num_envs
         if seed is None:
             seeds: list[int | None] = [None] * n
@@ -160,10 +167,17 @@ class AnchorReleaseVectorEnv(VectorEnv):
             self._autoreset[i] = False
             self._started[i] = True
             infos.append((i, info))
-        return self._obs.copy(), merge_infos(infos, n)
+        return self._obs.copy(), infos
 
     def step(self, actions):
         """Step every slot; a slot that ended on the previous step is reset instead (next-step autoreset)."""
+        obs, rewards, terminated, truncated, infos = self.step_slots(actions)
+        return obs, rewards, terminated, truncated, merge_infos(infos, self.num_envs)
+
+    def step_slots(self, actions) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                           list[tuple[int, dict[str, Any]]]]:
+        """:meth:`step` with the infos as ``(slot, info)`` pairs (merged by the caller): plain dicts cross a process
+        boundary 25x cheaper than the merged numpy layout (pickled both ways, 8 slots: 23 against 636 us)."""
         if not self._started.all():
             raise RuntimeError("call reset() before step()")
         actions = np.asarray(actions, dtype=np.float32).reshape(self.num_envs, len(ACTION_NAMES))
@@ -187,7 +201,7 @@ class AnchorReleaseVectorEnv(VectorEnv):
                 self._obs[i], rewards[i], terminated[i], truncated[i], info = core.finish_step(status, error)
             infos.append((i, info))
         self._autoreset = terminated | truncated
-        return self._obs.copy(), rewards, terminated, truncated, merge_infos(infos, self.num_envs)
+        return self._obs.copy(), rewards, terminated, truncated, infos
 
     def render(self):
         """One frame per slot (``render_mode="rgb_array"``)."""

@@ -1,12 +1,12 @@
 """The fall's resolution is fitted at the release (SceneFactory.fall_resolution, moor_env.remesh).
 
-In calm water the pre-release phase runs on the fidelity preset's own resolution (`fast`: 2 m chain); at the
-release the preset's tight_line resolution (configs/fidelity.yaml) takes over where the mooring line, at the
-spacing and line length of that moment, will be tight at touchdown. In waves, or where the loop is tight from the
-start, the tight_line resolution runs from the start (SceneFactory.pre_release_resolution). Reference for the geometry: the default scene
-(500 m, spacing 0.1 h = 50 m, line 1.08 h) keeps 50 m of slack with its chord 6.5 deg from vertical (coarse in
-calm water); 59 s of widening at the DP limits (27.25 m) and hauling in at the winch limit (17.7 m) leaves
-28.5 m of slack at 10.0 deg (tight).
+In calm water the pre-release phase runs on the fidelity preset's own resolution (`fast`: 2 m chain); at the release
+the preset's tight_line resolution (configs/fidelity.yaml) takes over where the mooring line, at the spacing and
+line length of that moment, will be tight at touchdown. In waves, or where the loop is tight from the start, the
+tight_line resolution runs from the start (SceneFactory.pre_release_resolution). Reference for the geometry: the
+default scene (500 m, spacing 0.1 h = 50 m, line 1.08 h) keeps 50 m of slack with its chord 6.5 deg from vertical
+(coarse in calm water); 59 s of widening at the DP limits (27.25 m) and hauling in at the winch limit (17.7 m)
+leaves 28.5 m of slack at 10.0 deg (tight).
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from moor_env.envs import AnchorReleaseVectorEnv
-from moor_env.envs.sharded import ShardedVectorEnv, _shard_bounds, concat_infos
+from moor_env.envs.sharded import ShardedVectorEnv, _shard_bounds
 from moor_env.errors import ConfigError
 
 
@@ -64,16 +64,6 @@ def test_sharded_rows_and_infos_equal_the_batched_env(tiny):
     sharded.close()
     batched.close()
     assert sharded.processes == []
-
-
-def test_concat_infos_pads_keys_that_one_shard_lacks():
-    parts = [{"a": np.array([1.0, 2.0]), "_a": np.array([True, True])},
-             {"a": np.array([3.0]), "_a": np.array([False]), "s": np.array(["x"], dtype=object),
-              "_s": np.array([True]), "d": {"v": np.array([5]), "_v": np.array([True])}, "_d": np.array([True])}]
-    out = concat_infos(parts, [2, 1])
-    assert out["a"].tolist() == [1.0, 2.0, 3.0] and out["_a"].tolist() == [True, True, False]
-    assert out["s"].tolist() == [None, None, "x"] and out["_s"].tolist() == [False, False, True]
-    assert out["d"]["v"].tolist() == [0, 0, 5] and out["_d"].tolist() == [False, False, True]
 
 
 def test_worker_failure_is_raised_in_the_main_process(tiny):
