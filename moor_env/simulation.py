@@ -30,6 +30,7 @@ from moor_env.physics.integrate import (
     advance,
     compute_accelerations,
 )
+from moor_env.physics.line import top_tensions
 from moor_env.physics.statics import change_line_length, solve_equilibrium
 from moor_env.physics.vessels import jonswap_components, sample_tracks
 
@@ -77,7 +78,7 @@ _ARRAY_FIELDS = ("node_pos", "node_vel", "body_state", "node_i", "node_f", "seg_
 class Workspace:
     """Scratch arrays for the kernels, allocated once per simulator."""
 
-    def __init__(self, n_nodes: int, n_segs: int) -> None:
+    def __init__(self, n_nodes: int, n_segs: int, n_lines: int) -> None:
         self.node_force = np.zeros((n_nodes, 3))
         self.node_mm = np.zeros((n_nodes, 6))
         self.node_mass = np.zeros(n_nodes)
@@ -92,6 +93,7 @@ class Workspace:
         self.touchdown = np.zeros(L.N_TD)
         self.hist = np.zeros((HISTORY_CAPACITY, L.N_HIST))
         self.hist_count = np.zeros(1, dtype=np.int64)
+        self.top_tension = np.zeros(n_lines)  # the lines' loads on their vessels [N] (``top_tensions_n``)
 
 
 class Simulator:
@@ -106,7 +108,7 @@ class Simulator:
     def __init__(self, model: Model) -> None:
         self.model = model
         self.env_f = model.env_f.copy()
-        self.work = Workspace(model.node_i.shape[0], model.seg_i.shape[0])
+        self.work = Workspace(model.node_i.shape[0], model.seg_i.shape[0], model.line_i.shape[0])
         self.state = SimState(node_pos=model.node_pos0.copy(), node_vel=np.zeros_like(model.node_pos0),
                               body_state=model.body_state0.copy(), node_i=model.node_i.copy(),
                               node_f=model.node_f.copy(), seg_i=model.seg_i.copy(), seg_f=model.seg_f.copy(),
@@ -267,20 +269,14 @@ class Simulator:
 
     def top_tensions_n(self) -> dict[str, float]:
         """Load of each line on its vessel (top-segment tension plus the top half-segment's weight and drag),
-        or the top segment's tension for a line ending at a connection node [N], at the current state."""
+        or the top segment's tension for a line ending at a connection node [N], at the current state
+        (:func:`moor_env.physics.line.top_tensions`; the batch kernel leaves them with the loads)."""
+        st, w = self.state, self.work
         if not self._loads_current():
             self.evaluate_loads()
-        out = {}
-        for name, info in self.model.lines.items():
-            k = self.state.line_i[info.index, L.LI_SEG_START] + self.state.line_i[info.index, L.LI_NSEG] - 1
-            top = self.state.seg_i[k, L.SI_B]
-            if not self.state.seg_i[k, L.SI_ACTIVE]:
-                out[name] = 0.0
-            elif self.state.node_i[top, L.NI_KIND] == L.NODE_VESSEL:
-                out[name] = math.hypot(*self.work.node_force[top].tolist())
-            else:  # a line ending at a free connection: its top segment's tension
-                out[name] = float(self.work.seg_tension[k])
-        return out
+            top_tensions(st.line_i, st.seg_i, st.node_i, w.node_force, w.seg_tension, w.top_tension)
+        values = w.top_tension.tolist()
+        return {name: values[info.index] for name, info in self.model.lines.items()}
 
     def line_length_on_seabed_m(self, material_names: set[str] | None = None, tolerance_m: float = 0.5) -> float:
         """Unstretched length of segments with both ends within ``tolerance_m`` of the seabed [m]."""

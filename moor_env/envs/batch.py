@@ -14,9 +14,9 @@ every listed array referenced while its entry is in use, checks dtype, rank and 
 entry, and rebuilds the entry when the simulator's state object changes (the arrays of one state are never
 replaced; ``set_vessel_motion`` may replace the vessel tracks, whose row is refreshed on every call).
 
-After each scene's advance the kernel evaluates the loads at the state reached (unless it blew up), so the
-observation's tensions (``Simulator.top_tensions_n``) need no second kernel call and that work runs on the
-batch's threads.
+After each scene's advance the kernel evaluates the loads and the lines' top tensions at the state reached
+(unless it blew up), so the observation's tensions (``Simulator.top_tensions_n``) need no second kernel call and
+that work runs on the batch's threads.
 
 Why the single env goes through this kernel too (with one scene): LLVM optimises ``advance`` together with its
 caller (inlining, constant arguments), and with the kernels' fastmath ``contract`` flag the fused multiply-adds
@@ -48,6 +48,7 @@ from numba.extending import intrinsic
 from moor_env.errors import SimulationDiverged
 from moor_env.physics import layout as L
 from moor_env.physics.integrate import advance, compute_accelerations
+from moor_env.physics.line import top_tensions
 from moor_env.simulation import Simulator
 
 # (name, dtype, ndim) of every per-scene array argument of ``advance``, in call order
@@ -62,6 +63,9 @@ _ARRAY_ARGS: tuple[tuple[str, type, int], ...] = (
     ("pos0", np.float64, 2), ("vel0", np.float64, 2), ("body0", np.float64, 1), ("touchdown", np.float64, 1),
     ("hist", np.float64, 2), ("hist_count", np.int64, 1),
 )
+# after them, the per-scene arrays the kernel writes its outputs into
+_OUTPUT_ARGS: tuple[tuple[str, type, int], ...] = (("top_tension", np.float64, 1),)
+_TABLE_ARGS = _ARRAY_ARGS + _OUTPUT_ARGS
 _TRACKS = [name for name, _, _ in _ARRAY_ARGS].index("tracks")
 # columns of a scene's per-call scalars (float64 table) and results (int64 / float64 tables)
 IN_T, IN_T_END, IN_DT, IN_INTEGRATOR, IN_BODY_ACTIVE, IN_DETECT = range(6)
@@ -113,8 +117,9 @@ def advance_many(scalars, addresses, out_i, out_t):
     ----------
     scalars : float64[n, 6]
         t, t_end, dt [s], integrator code, body active (0/1), detect touchdown (0/1) (``IN_*`` columns).
-    addresses : int64[n, len(_ARRAY_ARGS), 4]
-        Data address and shape of each array argument of ``advance`` (see the module docstring).
+    addresses : int64[n, len(_TABLE_ARGS), 4]
+        Data address and shape of each array argument of ``advance`` and of each output array
+        (``_OUTPUT_ARGS``; see the module docstring).
     out_i : int64[n, 4]
         Status, steps taken, failing component kind and index (``OUT_*`` columns).
     out_t : float64[n]
@@ -130,6 +135,7 @@ def advance_many(scalars, addresses, out_i, out_t):
         node_contact, node_acc, seg_tension = _f64_1d(a[18]), _f64_2d(a[19]), _f64_1d(a[20])
         body_load, body_acc, pos0, vel0 = _f64_1d(a[21]), _f64_1d(a[22]), _f64_2d(a[23]), _f64_2d(a[24])
         body0, touchdown, hist, hist_count = _f64_1d(a[25]), _f64_1d(a[26]), _f64_2d(a[27]), _i64_1d(a[28])
+        top_tension = _f64_1d(a[29])
         body_active = scalars[i, IN_BODY_ACTIVE] != 0.0
         status, t_reached, n_steps, fail_kind, fail_index = advance(
             scalars[i, IN_T], scalars[i, IN_T_END], scalars[i, IN_DT], np.int64(scalars[i, IN_INTEGRATOR]),
@@ -141,6 +147,7 @@ def advance_many(scalars, addresses, out_i, out_t):
             compute_accelerations(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f, mat_f,
                                   line_f, body_f, body_q, env_f, current_profile, node_force, node_mm, node_mass,
                                   node_contact, node_acc, seg_tension, body_load, body_acc)
+            top_tensions(line_i, seg_i, node_i, node_force, seg_tension, top_tension)
         out_i[i, OUT_STATUS] = status
         out_i[i, OUT_STEPS] = n_steps
         out_i[i, OUT_FAIL_KIND] = fail_kind
@@ -159,6 +166,7 @@ def _sources(sim: Simulator) -> dict[str, np.ndarray]:
         "node_mm": w.node_mm, "node_mass": w.node_mass, "node_contact": w.node_contact, "node_acc": w.node_acc,
         "seg_tension": w.seg_tension, "body_load": w.body_load, "body_acc": w.body_acc, "pos0": w.pos0,
         "vel0": w.vel0, "body0": w.body0, "touchdown": w.touchdown, "hist": w.hist, "hist_count": w.hist_count,
+        "top_tension": w.top_tension,
     }
 
 
@@ -178,8 +186,8 @@ class _Entry:
     def __init__(self, sim: Simulator) -> None:
         sources = _sources(sim)
         self.state = sim.state
-        self.arrays = [sources[name] for name, _, _ in _ARRAY_ARGS]
-        self.table = np.array([_address_row(name, sources[name], dtype, ndim) for name, dtype, ndim in _ARRAY_ARGS],
+        self.arrays = [sources[name] for name, _, _ in _TABLE_ARGS]
+        self.table = np.array([_address_row(name, sources[name], dtype, ndim) for name, dtype, ndim in _TABLE_ARGS],
                               dtype=np.int64)
 
     def refresh_tracks(self, tracks: np.ndarray) -> None:
@@ -248,7 +256,7 @@ class BatchAdvancer:
         """One kernel call on the scenes of ``jobs``; returns ``out_i``, ``out_t`` and the kernel's CPU time."""
         n = len(jobs)
         scalars = np.empty((n, 6))
-        addresses = np.empty((n, len(_ARRAY_ARGS), 4), dtype=np.int64)
+        addresses = np.empty((n, len(_TABLE_ARGS), 4), dtype=np.int64)
         entries = []  # keeps every array referenced until the call returns
         for i, (sim, t_stop, detect, step_s) in enumerate(jobs):
             entry = self._entry(sim)

@@ -37,7 +37,7 @@ from moor_env.config import (
     tight_line_rule,
 )
 from moor_env.envs.config import SCENARIO_FIELDS, SCENARIO_RANGES, SEED_FIELD, SEED_HIGH, Choice, EnvConfig, Uniform
-from moor_env.envs.equilibria import EquilibriumCache, scene_key, statics_scene_dict
+from moor_env.envs.equilibria import EquilibriumCache, plain_copy, scene_key, statics_scene_dict
 from moor_env.errors import ConfigError, SimulationDiverged, StaticsNotConverged
 from moor_env.physics import layout as L
 from moor_env.physics._jit import jit
@@ -109,7 +109,7 @@ class Advance:
 
 def apply_scene_overrides(base: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
     """Copy of a scene mapping with ``--set`` style overrides (shortcuts of :data:`SET_SHORTCUTS`) applied."""
-    data = json.loads(json.dumps(base))
+    data = plain_copy(base)
     chain = data.get("installation", {}).get("chain_material", "chain_142")
     for key, value in overrides.items():
         path = SET_SHORTCUTS.get(key, key).replace("{chain}", str(chain)).split(".")
@@ -222,9 +222,12 @@ class SceneFactory:
         """Scene mapping of a scenario."""
         return apply_scene_overrides(self.base, self.scene_overrides(scenario))
 
-    def statics_data(self, scenario: dict[str, Any]) -> dict[str, Any]:
-        """Scene mapping whose equilibrium starts the episode (see :mod:`moor_env.envs.equilibria`)."""
-        data = statics_scene_dict(self.scene_data(scenario), self.chain_material, self.nominal_cd_t)
+    def statics_data(self, scenario: dict[str, Any], scene_data: dict[str, Any] | None = None) -> dict[str, Any]:
+        """Scene mapping whose equilibrium starts the episode (see :mod:`moor_env.envs.equilibria`), from the
+        scenario's :meth:`scene_data` (made here when not given)."""
+        if scene_data is None:
+            scene_data = self.scene_data(scenario)
+        data = statics_scene_dict(scene_data, self.chain_material, self.nominal_cd_t)
         if data["environment"]["current"]["scale"] == 0.0:
             data["environment"]["current"]["direction_deg"] = 0.0
         return data
@@ -243,7 +246,7 @@ class SceneFactory:
             Naming the scene key the scenario makes invalid.
         """
         data = self.scene_data(scenario)
-        statics_data = self.statics_data(scenario)
+        statics_data = self.statics_data(scenario, data)
         key = scene_key(statics_data, "")
         statics = self.statics_scenes.get(key)
         try:

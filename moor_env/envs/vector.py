@@ -42,10 +42,14 @@ def merge_infos(infos: list[tuple[int, dict[str, Any]]], num_envs: int) -> dict[
     for key in keys:
         present = [(i, info[key]) for i, info in infos if key in info]
         first = present[0][1]
+        every_slot = len(present) == num_envs and all(i == k for k, (i, _) in enumerate(present))
+        numeric = type(first) in (int, float, bool) or issubclass(type(first), np.number)
         if isinstance(first, dict):
             array = merge_infos(present, num_envs)
+        elif numeric and every_slot:  # the common case, in one call
+            array = np.array([value for _, value in present], dtype=type(first))
         else:
-            if type(first) in (int, float, bool) or issubclass(type(first), np.number):
+            if numeric:
                 array = np.zeros(num_envs, dtype=type(first))
             elif isinstance(first, np.ndarray):
                 array = np.zeros((num_envs, *first.shape), dtype=first.dtype)
@@ -53,8 +57,11 @@ def merge_infos(infos: list[tuple[int, dict[str, Any]]], num_envs: int) -> dict[
                 array = np.full(num_envs, fill_value=None, dtype=object)
             for i, value in present:
                 array[i] = value
-        mask = np.zeros(num_envs, dtype=np.bool_)
-        mask[[i for i, _ in present]] = True
+        if every_slot:
+            mask = np.ones(num_envs, dtype=np.bool_)
+        else:
+            mask = np.zeros(num_envs, dtype=np.bool_)
+            mask[[i for i, _ in present]] = True
         out[key], out[f"_{key}"] = array, mask
     return out
 

@@ -50,6 +50,7 @@ from moor_env.physics.layout import (
     NI_LINE,
     NODE_FREE,
     NODE_INACTIVE,
+    NODE_VESSEL,
     SF_L0,
     SI_A,
     SI_ACTIVE,
@@ -203,3 +204,19 @@ def _merge_top(line, k, new_l0, node_i, seg_i, seg_f, line_i):
     seg_i[k, SI_ACTIVE] = 0
     node_i[removed, NI_KIND] = NODE_INACTIVE
     line_i[line, LI_NSEG] -= 1
+
+
+@jit
+def top_tensions(line_i, seg_i, node_i, node_force, seg_tension, out):
+    """Load of each line on its vessel [N] into ``out[line]``, from loads already evaluated at the state: the
+    resultant force on the top node (top segment's tension plus the top half-segment's weight and drag) where
+    the line ends at a vessel, else its top segment's tension; 0 for a dropped line."""
+    for line in range(line_i.shape[0]):
+        k = line_i[line, LI_SEG_START] + line_i[line, LI_NSEG] - 1
+        top = seg_i[k, SI_B]
+        if seg_i[k, SI_ACTIVE] == 0:
+            out[line] = 0.0
+        elif node_i[top, NI_KIND] == NODE_VESSEL:
+            out[line] = math.sqrt(node_force[top, 0] ** 2 + node_force[top, 1] ** 2 + node_force[top, 2] ** 2)
+        else:
+            out[line] = seg_tension[k]
