@@ -11,8 +11,7 @@ so one episode is 59 s of pre-release control plus the fall to touchdown (the is
 fall"), after the reset's warm-up. The equilibrium is solved before timing starts (it is cached). With waves the
 fall runs on the `fast` preset's tight_line resolution (fitted at the release, ``moor_env.remesh``). A second
 variant (``calm default scene``) keeps the bundled gjoa-500 scene as it is, without waves (Hs 0, no warm-up): its
-slack loop hangs and falls on the coarse resolution, and the pre-release phase steps
-``control.pre_release_dt_calm_s``. A third runs the pre-release phase at the scene's own step
+slack loop hangs and falls on the coarse resolution. A third runs the pre-release phase at the scene's own step
 (``control.pre_release_dt_s: null``) for comparison.
 
 Measured for each env: wall time, CPU time of every process involved (``/proc`` for worker processes),

@@ -94,8 +94,13 @@ def run_episode(env, seed: int) -> dict:
 
 
 def _summary(rows: list[dict], case: str) -> dict:
-    r = [x for x in rows if x["case"] == case and x.get("dspeed_m_s") is not None]
-    out = {"episodes": len(r), "fallbacks": int(sum(x["fallbacks"] for x in r)),
+    """Differences over the episodes where both the case and the reference touched down; ``failures``: episodes
+    of the case that did not (a blow-up the fallback could not undo), counted apart so that none is hidden."""
+    mine = [x for x in rows if x["case"] == case]
+    r = [x for x in mine if x.get("dspeed_m_s") is not None]
+    out = {"episodes": len(r), "failures": sum(x["status"] != "touchdown" for x in mine),
+           "failed_seeds": [x["seed"] for x in mine if x["status"] != "touchdown"],
+           "fallbacks": int(sum(x["fallbacks"] for x in mine)),
            "cpu_s_median": float(np.median([x["cpu_s"] for x in r]))}
     for key in ("dspeed_m_s", "dtilt_deg", "release_dvz_m_s", "release_dz_m"):
         v = np.abs([x[key] for x in r])
@@ -145,11 +150,12 @@ def main(argv: list[str] | None = None) -> dict:
     results.parent.mkdir(parents=True, exist_ok=True)
     results.write_text(json.dumps(result, indent=2))
     print(f"written {results.relative_to(ROOT)}; {result['machine']}")
-    print("| case | touchdown speed diff median / max [m/s] | tilt diff median / max [deg] | "
+    print("| case | compared | failures | touchdown speed diff median / max [m/s] | tilt diff median / max [deg] | "
           "release vz diff median / max [m/s] | fallbacks | CPU s/episode (median) |")
-    print("|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|")
     for name, s in summary.items():
-        print(f"| {name} | {s['dspeed_m_s']['median']:.3f} / {s['dspeed_m_s']['max']:.3f} | "
+        print(f"| {name} | {s['episodes']} | {s['failures']} | "
+              f"{s['dspeed_m_s']['median']:.3f} / {s['dspeed_m_s']['max']:.3f} | "
               f"{s['dtilt_deg']['median']:.2f} / {s['dtilt_deg']['max']:.2f} | "
               f"{s['release_dvz_m_s']['median']:.3f} / {s['release_dvz_m_s']['max']:.3f} | {s['fallbacks']} | "
               f"{s['cpu_s_median']:.3f} |")

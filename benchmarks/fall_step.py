@@ -1,0 +1,112 @@
+"""Time-step convergence of the fall in AnchorRelease-v0 episodes (the scene's implicit step after the release).
+
+Run from the repository root: ``python benchmarks/fall_step.py [--episodes 12] [--factors 2 1 0.5 0.25]
+[--calm]``. Writes ``benchmarks/results/fall_step.json`` (``fall_step_calm.json`` with ``--calm``).
+
+Each episode draws its scenario from the default config (seeds 1000, 1001, ...; ``--calm``: Hs 0) and is driven
+by the seeded random controls of ``benchmarks/pre_release_step.py`` (spacing and winch rates redrawn every 10 s,
+release at a random step between 25 and 55). It is run with the fall's step at each factor of the scene's step
+(the default config's fall: the ``fast`` preset's tight_line resolution, 5.6 ms) and everything else unchanged, so
+the pre-release phase and the state at the release are the same bit for bit; the finest factor is the
+reference. Compared: touchdown speed and tilt. Two neighbouring factors that agree with each other and not with
+the coarser ones show the step the fall converges at.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+from tqdm.auto import tqdm
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import gymnasium as gym  # noqa: E402
+from _machine import run_record  # noqa: E402
+from pre_release_step import ENV_ID, run_episode  # noqa: E402
+
+import moor_env  # noqa: E402, F401 - registers the envs
+from moor_env.envs import core as envcore  # noqa: E402
+
+RESULTS = ROOT / "benchmarks" / "results" / "fall_step.json"
+
+
+def scale_fall_step(core: envcore.InstallationCore, factor: float) -> None:
+    """Make ``core`` integrate every fall at ``factor`` times the scene's step (the pre-release is untouched)."""
+    begin = core.begin_step
+
+    def begin_step(action):
+        adv = begin(action)
+        if adv is not None and adv.phase == envcore.PHASE_FALL:
+            adv = envcore.Advance(adv.t_end_s, adv.detect_touchdown, adv.phase, adv.dt_s * factor)
+            core.pending = adv
+        return adv
+
+    core.begin_step = begin_step
+
+
+def _summary(rows: list[dict], factor: float) -> dict:
+    mine = [r for r in rows if r["factor"] == factor and r.get("dspeed_m_s") is not None]
+    speed = np.abs([r["dspeed_m_s"] for r in mine])
+    tilt = np.abs([r["dtilt_deg"] for r in mine])
+    return {"episodes": len(mine), "fall_dt_s_median": float(np.median([r["fall_dt_s"] for r in mine])),
+            "cpu_s_median": float(np.median([r["cpu_s"] for r in mine])),
+            "dspeed_m_s": {"median": float(np.median(speed)), "p90": float(np.percentile(speed, 90)),
+                           "max": float(speed.max())},
+            "dtilt_deg": {"median": float(np.median(tilt)), "p90": float(np.percentile(tilt, 90)),
+                          "max": float(tilt.max())}}
+
+
+def main(argv: list[str] | None = None) -> dict:
+    """Run every factor on every episode, write the JSON and print a table."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--episodes", type=int, default=12)
+    parser.add_argument("--factors", type=float, nargs="+", default=[2.0, 1.0, 0.5, 0.25],
+                        help="fall step as multiples of the scene's step; the smallest is the reference")
+    parser.add_argument("--calm", action="store_true", help="no waves (Hs 0); writes fall_step_calm.json")
+    args = parser.parse_args(argv)
+    load_before = os.getloadavg()[0]
+    factors = sorted(set(args.factors))
+    overrides = {"scenario.sea_state_hs_m": 0.0} if args.calm else {}
+    envs = {}
+    for factor in factors:
+        envs[factor] = gym.make(ENV_ID, overrides=overrides)
+        scale_fall_step(envs[factor].unwrapped.core, factor)
+    rows = []
+    for seed in tqdm(range(1000, 1000 + args.episodes), desc="episodes"):
+        episode = []
+        for factor in factors:  # the finest first: the reference
+            row = {"factor": factor, **run_episode(envs[factor], seed)}
+            row["fall_dt_s"] = row["scene_dt_s"] * factor
+            ref = episode[0] if episode else row
+            if row["speed_m_s"] is not None and ref["speed_m_s"] is not None:
+                row.update(dspeed_m_s=row["speed_m_s"] - ref["speed_m_s"], dtilt_deg=row["tilt_deg"] - ref["tilt_deg"])
+            episode.append(row)
+        rows += episode
+    summary = {f"{factor:g}x": _summary(rows, factor) for factor in factors[1:]}
+    result = {**run_record(load_before),
+              "config": "anchor-release (default), scenarios drawn with seeds 1000.." + (", Hs 0" if args.calm else ""),
+              "reference_factor": factors[0], "summary_abs_differences_to_reference": summary, "rows": rows}
+    path = RESULTS.with_name("fall_step_calm.json") if args.calm else RESULTS
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(result, indent=2, default=str))
+    print(f"written {path.relative_to(ROOT)}; {result['machine']}; reference: {factors[0]:g}x the scene's step")
+    print("| fall step | episodes | step [ms] | touchdown speed diff median / p90 / max [m/s] | "
+          "tilt diff median / p90 / max [deg] | CPU s/episode (median) |")
+    print("|---|---|---|---|---|---|")
+    for name, s in summary.items():
+        print(f"| {name} | {s['episodes']} | {1e3 * s['fall_dt_s_median']:.2f} | "
+              f"{s['dspeed_m_s']['median']:.3f} / {s['dspeed_m_s']['p90']:.3f} / {s['dspeed_m_s']['max']:.3f} | "
+              f"{s['dtilt_deg']['median']:.2f} / {s['dtilt_deg']['p90']:.2f} / {s['dtilt_deg']['max']:.2f} | "
+              f"{s['cpu_s_median']:.3f} |")
+    return result
+
+
+if __name__ == "__main__":
+    main()
