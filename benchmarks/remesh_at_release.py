@@ -116,7 +116,9 @@ def waves_check(seeds: int = 6) -> list[dict]:
 
 def _summary(rows: list[dict]) -> dict:
     out = {"episodes": len(rows), "cpu_s_median": float(np.median([x["cpu_s"] for x in rows])),
-           "tight_falls": int(sum(x["fall_resolution"] == "tight_line" for x in rows))}
+           "tight_falls": int(sum(x["fall_resolution"] == "tight_line" for x in rows)),
+           # episodes without a touchdown are left out of the differences: count them so that none is hidden
+           "failures": int(sum(x["status"] != "touchdown" for x in rows))}
     for key in ("dspeed_m_s", "dtilt_deg"):
         v = np.abs([x[key] for x in rows if x.get(key) is not None])
         if v.size:
@@ -156,11 +158,11 @@ def main(argv: list[str] | None = None) -> dict:
     RESULTS.parent.mkdir(parents=True, exist_ok=True)
     RESULTS.write_text(json.dumps(result, indent=2, default=str))
     print(f"written {RESULTS.relative_to(ROOT)}; {result['machine']}; load {load_before:.2f}")
-    print("| case | falls on tight_line | touchdown speed diff median / p90 / max [m/s] | "
+    print("| case | falls on tight_line | failures | touchdown speed diff median / p90 / max [m/s] | "
           "tilt diff median / p90 / max [deg] | CPU s/episode (median) |")
-    print("|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|")
     for label, s in summary.items():
-        tight = f"{s['tight_falls']}/{s['episodes']}"
+        tight = f"{s['tight_falls']}/{s['episodes']} | {s['failures']}"
         if label in ("calm: fine throughout", "waves: default"):
             print(f"| {label} | {tight} | reference | reference | {s['cpu_s_median']:.3f} |")
             continue
