@@ -15,7 +15,6 @@ the coarser ones show the step the fall converges at.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 from pathlib import Path
@@ -28,7 +27,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import gymnasium as gym  # noqa: E402
-from _machine import run_record  # noqa: E402
+from _machine import run_record, write_results  # noqa: E402
 from pre_release_step import ENV_ID, run_episode  # noqa: E402
 
 import moor_env  # noqa: E402, F401 - registers the envs
@@ -93,10 +92,8 @@ def main(argv: list[str] | None = None) -> dict:
     result = {**run_record(load_before),
               "config": "anchor-release (default), scenarios drawn with seeds 1000.." + (", Hs 0" if args.calm else ""),
               "reference_factor": factors[0], "summary_abs_differences_to_reference": summary, "rows": rows}
-    path = RESULTS.with_name("fall_step_calm.json") if args.calm else RESULTS
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(result, indent=2, default=str))
-    print(f"written {path.relative_to(ROOT)}; {result['machine']}; reference: {factors[0]:g}x the scene's step")
+    write_results(RESULTS.with_name("fall_step_calm.json") if args.calm else RESULTS, result)
+    print(f"reference: {factors[0]:g}x the scene's step")
     print("| fall step | episodes | step [ms] | touchdown speed diff median / p90 / max [m/s] | "
           "tilt diff median / p90 / max [deg] | CPU s/episode (median) |")
     print("|---|---|---|---|---|---|")

@@ -15,7 +15,6 @@ refinement; if it moves the outcome, the reference is not converged at that leve
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import time
@@ -28,7 +27,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import gymnasium as gym  # noqa: E402
-from _machine import run_record  # noqa: E402
+from _machine import run_record, write_results  # noqa: E402
 
 import moor_env  # noqa: E402, F401 - registers the envs
 from moor_env.envs import core as envcore  # noqa: E402
@@ -147,9 +146,7 @@ def main(argv: list[str] | None = None) -> dict:
         "summary_abs_differences_to_reference": summary,
         "rows": rows,
     }
-    results.parent.mkdir(parents=True, exist_ok=True)
-    results.write_text(json.dumps(result, indent=2))
-    print(f"written {results.relative_to(ROOT)}; {result['machine']}")
+    write_results(results, result)
     print("| case | compared | failures | touchdown speed diff median / max [m/s] | tilt diff median / max [deg] | "
           "release vz diff median / max [m/s] | fallbacks | CPU s/episode (median) |")
     print("|---|---|---|---|---|---|---|---|")

@@ -34,7 +34,6 @@ is cached, the pre-release phase and the fall).
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 from pathlib import Path
@@ -47,7 +46,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import gymnasium as gym  # noqa: E402
-from _machine import run_record  # noqa: E402
+from _machine import run_record, write_results  # noqa: E402
 from pre_release_step import ReferenceVariants, run_episode  # noqa: E402
 
 import moor_env  # noqa: E402, F401 - registers the envs
@@ -155,9 +154,7 @@ def main(argv: list[str] | None = None) -> dict:
         "rows": rows,
         "waves_check": waves,
     }
-    RESULTS.parent.mkdir(parents=True, exist_ok=True)
-    RESULTS.write_text(json.dumps(result, indent=2, default=str))
-    print(f"written {RESULTS.relative_to(ROOT)}; {result['machine']}; load {load_before:.2f}")
+    write_results(RESULTS, result)
     print("| case | falls on tight_line | failures | touchdown speed diff median / p90 / max [m/s] | "
           "tilt diff median / p90 / max [deg] | CPU s/episode (median) |")
     print("|---|---|---|---|---|---|")
