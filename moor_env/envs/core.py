@@ -36,6 +36,7 @@ from moor_env.config import (
     tight_line_needed,
     tight_line_rule,
 )
+from moor_env.envs.batch import BatchAdvancer
 from moor_env.envs.config import SCENARIO_FIELDS, SCENARIO_RANGES, SEED_FIELD, SEED_HIGH, Choice, EnvConfig, Uniform
 from moor_env.envs.equilibria import EquilibriumCache, plain_copy, scene_key, statics_scene_dict
 from moor_env.errors import ConfigError, SimulationDiverged, StaticsNotConverged
@@ -864,8 +865,6 @@ def run_advance(core: InstallationCore, adv: Advance, chunk_s: float | None = No
     vector env uses, so that both give bit-identical episodes. Chunking never changes the result: the kernel
     takes whole steps of dt from the same start time.
     """
-    from moor_env.envs.batch import BatchAdvancer  # noqa: PLC0415 - numba typed lists, built on first use
-
     if core.advancer is None:
         core.advancer = BatchAdvancer()
     sim = core.sim

@@ -3,10 +3,11 @@
 ``gym.make_vec("moor_env/AnchorRelease-v0", num_envs=8)`` (or ``vectorization_mode="vector_entry_point"``)
 returns :class:`AnchorReleaseVectorEnv`: ``num_envs`` episode slots, each an
 :class:`~moor_env.envs.core.InstallationCore` (the single env's RL logic), advanced together by the GIL-free
-batch kernel (:mod:`moor_env.envs.batch`: up to 8 scenes per numba call, groups of scenes on ``num_threads``
+batch kernel (:mod:`moor_env.envs.batch`: one numba call per group of scenes, the groups on ``num_threads``
 threads). Row i equals ``AnchorReleaseEnv`` reset with seed ``seed + i`` and given the same actions, bit for
 bit (tested), including next-step autoreset as Gymnasium's ``SyncVectorEnv`` does it. Equilibria are shared
-between the slots (one cache).
+between the slots (one cache). With ``num_workers`` > 1 the entry point (:func:`make_vector_env`) returns
+:class:`~moor_env.envs.sharded.ShardedVectorEnv` instead: the slots split over that many processes.
 """
 
 from __future__ import annotations
@@ -98,7 +99,7 @@ class AnchorReleaseVectorEnv(VectorEnv):
         ``"rgb_array"``: ``render()`` returns one frame per slot.
     num_threads : int, optional
         Threads that call the GIL-free batch kernel on interleaved groups of slots (default: the cores this
-        process may use); with 1, one numba call advances up to 8 slots.
+        process may use); with 1, one numba call advances every slot.
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": ["rgb_array"], "render_fps": 4}
