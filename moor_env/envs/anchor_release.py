@@ -200,7 +200,8 @@ class AnchorReleaseEnv(gym.Env):
       ``python -m moor_env.envs.video --out episode.gif`` writes an episode as a GIF.
 
     ``gym.make_vec("moor_env/AnchorRelease-v0", num_envs=n)`` returns the batched vector env
-    (``moor_env.envs.AnchorReleaseVectorEnv``, one kernel call per thread group per step);
+    (``moor_env.envs.AnchorReleaseVectorEnv``, one kernel call per thread group per step; ``num_workers=k``
+    splits it over k processes, ``moor_env.envs.sharded.ShardedVectorEnv``);
     ``vectorization_mode="sync"`` or ``"async"`` give Gymnasium's vector envs of this env.
 
     ``info`` holds ``reward_terms``, ``sim_status`` (running, touchdown, time limit, diverged: ..., no touchdown
