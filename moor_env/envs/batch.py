@@ -6,10 +6,11 @@ array per argument of the physics entry point :func:`moor_env.physics.integrate.
 array's data address and shape. :func:`advance_many` rebuilds each array as a view on that memory
 (``numba.carray``) and calls ``advance`` for each scene in a loop, without the GIL.
 
-Why addresses: numba unboxes every array argument on every call, about 0.24 us each with the GIL held. The
-former signature (a tuple of 8 arrays per argument, 232 arrays) spent 56-75 us per call before the first step
-(measured), as much as a whole control step of a calm scene; the table is one array, unboxed in under a
-microsecond, whatever the number of scenes. The addresses stay valid because :class:`BatchAdvancer` keeps
+Why addresses: numba unboxes every array argument on every call, with the GIL held. The former signature (a
+tuple of 8 arrays per argument, 232 arrays) spent 56-75 us per call before the first step (measured with nothing
+to integrate), a fifth of a calm scene's control step; the kernel now takes four small arrays whatever the number
+of scenes, and the same one-scene call with nothing to integrate costs 16 us, most of it the load evaluation the
+kernel now does (below). The addresses stay valid because :class:`BatchAdvancer` keeps
 every listed array referenced while its entry is in use, checks dtype, rank and C layout when it builds an
 entry, and rebuilds the entry when the simulator's state object changes (the arrays of one state are never
 replaced; ``set_vessel_motion`` may replace the vessel tracks, whose row is refreshed on every call).
