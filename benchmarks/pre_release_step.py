@@ -1,6 +1,6 @@
 """Accuracy of the coarse pre-release step (``control.pre_release_dt_s``) of AnchorRelease-v0.
 
-Run from the repository root: ``python benchmarks/pre_release_step.py [--episodes 12] [--steps 0.05 0.1 0.2]``.
+Run from the repository root: ``python benchmarks/pre_release_step.py [--calm] [--episodes 12] [--steps 0.1 0.2]``.
 Writes ``benchmarks/results/pre_release_step.json``.
 
 Each episode draws its scenario from the default config (``configs/envs/anchor-release.yaml``, seeds 1000, 1001,
@@ -112,12 +112,12 @@ def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--episodes", type=int, default=12)
     parser.add_argument("--steps", type=float, nargs="+", default=None,
-                        help="pre-release steps [s] (default 0.05 0.1 0.2; with --calm 0.1 0.25 0.5)")
+                        help="pre-release steps [s] (default 0.1 0.2 0.25 0.5; with --calm 0.1 0.25 0.5)")
     parser.add_argument("--calm", action="store_true",
                         help="no waves (Hs 0 in every scenario); writes pre_release_step_calm.json")
     args = parser.parse_args(argv)
     if args.steps is None:
-        args.steps = [0.1, 0.25, 0.5] if args.calm else [0.05, 0.1, 0.2]
+        args.steps = [0.1, 0.25, 0.5] if args.calm else [0.1, 0.2, 0.25, 0.5]
     sea = {"scenario.sea_state_hs_m": 0.0} if args.calm else {}
     results = RESULTS.with_name("pre_release_step_calm.json") if args.calm else RESULTS
     load_before = os.getloadavg()[0]

@@ -70,9 +70,9 @@ class AnchorReleaseEnv(gym.Env):
     penetrate) and vertical (at most 5 deg tilt). Each step is ``control.interval_s`` of simulated time (default
     1 s) of the numba lumped-mass model (:class:`moor_env.Simulator`) with waves, current, the wire and both
     lines. A step whose release action is positive releases the anchor and simulates the fall to touchdown.
-    Before the release the implicit integrator steps ``control.pre_release_dt_s`` (0.1 s; waves of 7-13 s and
-    slow vessel moves), the fall at the scene's own step; the accuracy of that trade is measured by
-    ``benchmarks/pre_release_step.py`` (``--calm`` without waves). A calm scenario
+    Before the release the implicit integrator steps ``control.pre_release_dt_s`` (0.2 s; waves of 7-13 s and
+    slow vessel moves; without waves ``control.pre_release_dt_calm_s``, 0.5 s), the fall at the scene's own step;
+    the accuracy of that trade is measured by ``benchmarks/pre_release_step.py`` (``--calm``). A calm scenario
     with a slack loop runs on the fidelity preset's own resolution (``fast``: 2 m chain) and, at the release, moves
     onto its ``tight_line`` resolution if the loop, at the spacing and line length of that moment, will be tight
     at touchdown (``moor_env.remesh``); in waves, or with a loop tight from the start, ``tight_line`` runs

@@ -130,6 +130,10 @@ class ControlConfig(_Strict):
         description="integration step before the release (warm-up, control, hold) with the implicit integrator "
                     "[s]; each advance takes the whole number of equal steps nearest below it, never finer than "
                     "the scene's step; null: the scene's step. The fall always uses the scene's step")
+    pre_release_dt_calm_s: float | None = Field(
+        None, gt=0.0, le=0.5,
+        description="pre_release_dt_s for a sea without waves (Hs 0), where the loop moves only with the "
+                    "vessels and the winch [s]; null: pre_release_dt_s")
     spacing_rate_max_m_s: float = Field(0.5, gt=0.0, le=2.0,
                                         description="second vessel's largest horizontal speed (DP slow move) [m/s]")
     spacing_accel_max_m_s2: float = Field(0.05, gt=0.0, le=1.0,

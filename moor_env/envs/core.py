@@ -541,7 +541,8 @@ class InstallationCore:
 
     # --- steps -------------------------------------------------------------------------------------------------
     def _pre_release(self, t_end_s: float, phase: str) -> Advance:
-        """Advance to ``t_end_s`` before the release, in steps of about ``control.pre_release_dt_s``.
+        """Advance to ``t_end_s`` before the release, in steps of about ``control.pre_release_dt_s`` (in a sea
+        without waves ``control.pre_release_dt_calm_s``, where set).
 
         The span is split into n equal steps, n the smallest whole number that keeps them at or below the
         configured step (never below the scene's step), so the advance ends exactly at ``t_end_s`` and the
@@ -550,9 +551,13 @@ class InstallationCore:
         coarser than the scene's the state is saved for :meth:`fallback`.
         """
         sim = self.sim
+        cfg = self.cfg.control
+        step = cfg.pre_release_dt_s
+        if self.hs == 0.0 and cfg.pre_release_dt_calm_s is not None:
+            step = cfg.pre_release_dt_calm_s
         target = sim.dt
-        if sim.integrator_code == INTEGRATOR_IMPLICIT_EULER and self.cfg.control.pre_release_dt_s is not None:
-            target = max(self.cfg.control.pre_release_dt_s, sim.dt)
+        if sim.integrator_code == INTEGRATOR_IMPLICIT_EULER and step is not None:
+            target = max(step, sim.dt)
         adv = Advance(t_end_s, False, phase, _even_step(t_end_s - sim.state.t, target))
         self.saved_state = None
         if adv.dt_s > sim.dt:

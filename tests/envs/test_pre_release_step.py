@@ -38,6 +38,18 @@ def test_coarse_steps_end_on_the_control_grid(tiny):
     assert core.begin_step(np.array([0.0, 0.0, 1.0])).dt_s == scene_dt
 
 
+def test_a_sea_without_waves_takes_the_calm_step(tiny):
+    env = _tiny(tiny, pre_release_dt_s=0.05, pre_release_dt_calm_s=0.125, interval_s=0.25)
+    core = env.unwrapped.core
+    env.reset(seed=3, options={"sea_state_hs_m": 0.0})
+    assert core.begin_step(HOLD).dt_s == 0.125
+    env.reset(seed=3, options={"sea_state_hs_m": 0.5})
+    assert core.begin_step(HOLD).dt_s == 0.05
+    unset = _tiny(tiny, pre_release_dt_s=0.05, interval_s=0.25)  # no calm step: the one step everywhere
+    unset.reset(seed=3, options={"sea_state_hs_m": 0.0})
+    assert unset.unwrapped.core.begin_step(HOLD).dt_s == 0.05
+
+
 def test_explicit_integrator_keeps_the_scene_step(tiny):
     env = gym.make("moor_env/AnchorRelease-v0", config="tiny", overrides={**tiny, "control.pre_release_dt_s": 0.13})
     env.reset(seed=3)

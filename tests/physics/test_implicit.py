@@ -274,3 +274,39 @@ def test_implicit_runs_are_bit_identical():
     b = simulate_drop("gjoa-500", dict(IMPLICIT, vessel_spacing_m=120.0))
     assert a.touchdown_speed_m_s == b.touchdown_speed_m_s
     assert np.array_equal(a.history, b.history)
+
+
+def _two_segment_column(dv_middle_z: float) -> tuple:
+    """A vertical column of three nodes (top held, two free) with the arrays ``_update_active_set`` reads: the
+    upper segment slack now, the lower taut; the solved dv of the middle node is ``dv_middle_z`` [m/s] and the
+    bottom node's is 0."""
+    node_pos = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -0.999], [0.0, 0.0, -2.0]])
+    node_vel = np.zeros((3, 3))
+    seg_i = np.zeros((2, L.N_SEG_I), np.int64)
+    seg_i[:, L.SI_ACTIVE] = 1
+    seg_i[0, [L.SI_A, L.SI_B]] = 0, 1
+    seg_i[1, [L.SI_A, L.SI_B]] = 1, 2
+    seg_f = np.ones((2, L.N_SEG_F))
+    mat_f = np.zeros((1, L.N_MAT_F))
+    mat_f[0, L.MF_EA], mat_f[0, L.MF_MASS], mat_f[0, L.MF_ZETA] = 1e9, 400.0, 0.3
+    node_acc = np.zeros((3, 3))
+    node_acc[1, 2] = dv_middle_z
+    orow = np.zeros((3, 3), np.int64)
+    orow[:, I.OR_EFF] = -1, 1, 2
+    orow[0, I.OR_FLAGS] = np.int64(1) << 2  # segment 1 taut, segment 0 slack
+    return node_pos, node_vel, seg_i, seg_f, mat_f, node_acc, orow
+
+
+def test_active_set_segments_enter_before_any_leaves():
+    """A solve that predicts one slack segment taut and another taut one compressed flips only the entering one;
+    the leaving one goes on the next pass if it is still predicted compressed. Reference: the rule of
+    ``_update_active_set`` (a wrong exit, frozen for the step, blew up a hanging loop at a 0.5 s step)."""
+    # the middle node moves down 0.1 m/s over 0.1 s: upper segment +1 cm (taut), lower -1 cm (compressed)
+    args = _two_segment_column(-0.1)
+    node_pos, node_vel, seg_i, seg_f, mat_f, node_acc, orow = args
+    h = 0.1
+    assert I._update_active_set(h, *args) == 1
+    assert I._is_active(orow, 0) == 1 and I._is_active(orow, 1) == 1
+    assert I._update_active_set(h, *args) == 1  # no entry left: the exit is taken
+    assert I._is_active(orow, 1) == 0
+    assert I._update_active_set(h, *args) == 0  # both changed once: frozen for the rest of the step
