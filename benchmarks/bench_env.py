@@ -12,7 +12,7 @@ fall"), after the reset's warm-up. The equilibrium is solved before timing start
 fall runs on the `fast` preset's tight_line resolution (fitted at the release, ``moor_env.remesh``). A second
 variant (``calm default scene``) keeps the bundled gjoa-500 scene as it is, without waves (Hs 0, no warm-up): its
 slack loop hangs and falls on the coarse resolution. A third runs the pre-release phase at the scene's own step
-(``control.pre_release_dt_s: null``) for comparison.
+(``control.pre_release_dt_s`` and ``pre_release_dt_calm_s`` null) for comparison.
 
 Measured for each env: wall time, CPU time of every process involved (``/proc`` for worker processes),
 transitions (env steps that are not autoresets) and episodes per second, per second per core used.
@@ -172,7 +172,8 @@ def main(argv: list[str] | None = None) -> dict:
     load_before = os.getloadavg()[0]
     variants = [("default config", OVERRIDES)]
     if not args.no_compare:
-        variants.append(("pre-release at the scene's step", {**OVERRIDES, "control.pre_release_dt_s": None}))
+        variants.append(("pre-release at the scene's step", {**OVERRIDES, "control.pre_release_dt_s": None,
+                                                             "control.pre_release_dt_calm_s": None}))
         variants.insert(1, ("calm default scene", {**OVERRIDES, **CALM}))
     rounds: list[list[dict]] = []
     for round_index in range(max(1, args.repeats)):

@@ -1,4 +1,5 @@
-"""Accuracy of the coarse pre-release step (``control.pre_release_dt_s``) of AnchorRelease-v0.
+"""Accuracy of the coarse pre-release step (``control.pre_release_dt_s``, ``pre_release_dt_calm_s`` without waves) of
+AnchorRelease-v0.
 
 Run from the repository root: ``python benchmarks/pre_release_step.py [--calm] [--episodes 12] [--steps 0.1 0.2]``.
 Writes ``benchmarks/results/pre_release_step.json``.
@@ -129,7 +130,9 @@ def main(argv: list[str] | None = None) -> dict:
         ref = None
         for name, dt, delay, factor in cases:
             if name not in envs:
-                envs[name] = gym.make(ENV_ID, overrides={"control.pre_release_dt_s": dt, **sea})
+                # both keys: the calm one would otherwise take over wherever Hs is 0
+                envs[name] = gym.make(ENV_ID, overrides={"control.pre_release_dt_s": dt,
+                                                         "control.pre_release_dt_calm_s": dt, **sea})
                 ReferenceVariants(envs[name].unwrapped.core, delay, factor)
             row = {"case": name, **run_episode(envs[name], seed)}
             if ref is None:

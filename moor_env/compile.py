@@ -464,22 +464,41 @@ def _compile_catenary_line(scene: SceneConfig) -> Model:
     return _finish(scene, b, body_f, np.zeros((0, L.N_BODY_Q)), np.zeros(L.N_BODY_STATE), names, fair)
 
 
-def _set_time_step(model: Model, scene: SceneConfig) -> None:
-    disc = scene.discretization
-    model.integrator = disc.integrator
+def derived_time_step(model: Model, integrator: str, dt_safety: float) -> tuple[float, float, str]:
+    """The step ``integrator`` takes on ``model``'s mesh when none is set: ``dt_safety`` times its limit.
+
+    Returns (step [s], largest step accepted [s], what sets it). The implicit step's limit is an accuracy cap, not
+    a stability limit: steps up to ``IMPLICIT_STABLE_MULTIPLE`` times it are accepted.
+    """
     try:
-        limit, governed = stable_time_step(model.arrays(), disc.integrator)
+        limit, governed = stable_time_step(model.arrays(), integrator)
     except ValueError as exc:
-        raise ConfigError("discretization.integrator", disc.integrator, "symplectic_euler, or rk2 with axial damping",
+        raise ConfigError("discretization.integrator", integrator, "symplectic_euler, or rk2 with axial damping",
                           str(exc)) from None
     if not math.isfinite(limit):
         limit = 0.01  # anchor alone: the rigid body has no stiff mode; resolve the fall finely
         governed = "anchor-only default"
-    default = disc.dt_safety * limit
-    if disc.integrator == "implicit_euler" and governed != "anchor-only default":
+    default = dt_safety * limit
+    if integrator == "implicit_euler" and governed != "anchor-only default":
         # the implicit step is capped for accuracy, not stability: runs stay stable to a few times the cap
         limit *= IMPLICIT_STABLE_MULTIPLE
         governed = f"{governed}; refused beyond {IMPLICIT_STABLE_MULTIPLE:g}x that accuracy cap"
+    return default, limit, governed
+
+
+def fall_time_step(model: Model) -> tuple[str, float] | None:
+    """Integrator and step [s] of the fall where ``discretization.fall_integrator`` sets one other than the
+    scene's integrator (always the derived step: ``dt_s`` belongs to the scene's integrator); else None."""
+    disc = model.scene.discretization
+    if disc.fall_integrator is None or disc.fall_integrator == model.integrator:
+        return None
+    return disc.fall_integrator, derived_time_step(model, disc.fall_integrator, disc.dt_safety)[0]
+
+
+def _set_time_step(model: Model, scene: SceneConfig) -> None:
+    disc = scene.discretization
+    model.integrator = disc.integrator
+    default, limit, governed = derived_time_step(model, disc.integrator, disc.dt_safety)
     model.dt_limit_s = limit
     model.dt_governed_by = governed
     if disc.dt_s is None:

@@ -217,6 +217,10 @@ class DiscretizationConfig(_Strict):
     integrator: Literal["symplectic_euler", "rk2", "implicit_euler"] = "symplectic_euler"
     dt_s: float | None = Field(None, gt=0.0, le=1.0, description="time step [s]; None derives it from the stability limit")
     dt_safety: float = Field(0.9, gt=0.0, le=1.0, description="fraction of the stability limit used when dt_s is derived")
+    fall_integrator: Literal["symplectic_euler", "rk2", "implicit_euler"] | None = Field(
+        None, description="integrator of the fall after the release, at dt_safety times its own limit on the mesh "
+        "of the fall (e.g. symplectic_euler after an implicit pre-release phase: the explicit reference fall); "
+        "None: integrator")
     fit_to_geometry: bool = Field(
         True, description="fit a preset's tight_line resolution to the scene's release geometry when it is loaded; "
         "the envs set false and choose it themselves, at the reset and again for the fall at the release")
@@ -276,6 +280,7 @@ SET_SHORTCUTS: dict[str, str] = {
     "anchor_mass_scale": "anchor.mass_scale",
     "dt_s": "discretization.dt_s",
     "integrator": "discretization.integrator",
+    "fall_integrator": "discretization.fall_integrator",
     "fidelity": "fidelity",
 }
 

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from tqdm.auto import tqdm
 
-from moor_env.compile import VESSEL_SECOND, Model, compile_scene
+from moor_env.compile import VESSEL_SECOND, Model, compile_scene, fall_time_step
 from moor_env.config import SceneConfig, load_scene
 from moor_env.errors import SimulationDiverged
 from moor_env.physics import layout as L
@@ -35,6 +35,11 @@ from moor_env.physics.statics import change_line_length, solve_equilibrium
 from moor_env.physics.vessels import jonswap_components, sample_tracks
 
 HISTORY_CAPACITY = 20000
+
+
+def integrator_code(name: str) -> int:
+    """The kernels' code of an integrator named as in ``discretization.integrator``."""
+    return {"rk2": INTEGRATOR_RK2, "implicit_euler": INTEGRATOR_IMPLICIT_EULER}.get(name, INTEGRATOR_SYMPLECTIC_EULER)
 
 
 @dataclass
@@ -114,8 +119,7 @@ class Simulator:
                               node_f=model.node_f.copy(), seg_i=model.seg_i.copy(), seg_f=model.seg_f.copy(),
                               line_i=model.line_i.copy(), line_f=model.line_f.copy())
         self.dt = model.dt_s
-        self.integrator_code = {"rk2": INTEGRATOR_RK2, "implicit_euler": INTEGRATOR_IMPLICIT_EULER}.get(
-            model.integrator, INTEGRATOR_SYMPLECTIC_EULER)
+        self.integrator_code = integrator_code(model.integrator)
         self.vessel_mean_m = model.vessel_base_m.copy()
         self.tracks = np.zeros((1, 2, 6))
         self.sea = _sea_components(model.scene)
@@ -234,11 +238,16 @@ class Simulator:
 
     # --- events --------------------------------------------------------------------------------------------
     def release(self) -> None:
-        """Open the release unit: the chain top goes free; the wire (if kept) recoils, else it is dropped."""
+        """Open the release unit: the chain top goes free; the wire (if kept) recoils, else it is dropped. From
+        here on the fall's integrator and step (``discretization.fall_integrator``) apply, where set."""
         st, m = self.state, self.model
         if st.released:
             return
         self._loads_of = None
+        fall = fall_time_step(m)
+        if fall is not None:
+            self.integrator_code = integrator_code(fall[0])
+            self.dt = fall[1]
         if m.release_node >= 0:
             self.release_point_m = st.node_pos[m.release_node].copy()
             st.node_i[m.release_node, L.NI_KIND] = L.NODE_FREE

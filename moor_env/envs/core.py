@@ -237,7 +237,8 @@ class SceneFactory:
         """The scenario's validated scene, its statics mapping and that mapping's validated scene.
 
         The statics scene is validated once per equilibrium (cached); the episode scene is it with the
-        scenario's ``environment``, ``installation`` and chain material validated on their own, which is what
+        scenario's ``environment``, ``installation``, chain material and fall integrator validated on their own,
+        which is what
         :meth:`scene` gives at a fraction of the cost (a full validation re-reads the fidelity presets; tested
         equal). Any validation error is reported by :meth:`scene`.
 
@@ -254,11 +255,16 @@ class SceneFactory:
             if statics is None:
                 statics = scene_from_dict(statics_data)
             chain = self.chain_material
-            scene = statics.model_copy(update={
+            update = {
                 "environment": EnvironmentConfig.model_validate(data["environment"]),
                 "installation": InstallationConfig.model_validate(data["installation"]),
                 "materials": {**statics.materials, chain: MaterialConfig.model_validate(data["materials"][chain])},
-            })
+            }
+            fall = data.get("discretization", {}).get("fall_integrator")
+            if fall is not None:  # left out of the statics scene (it does not change the equilibrium)
+                update["discretization"] = DiscretizationConfig.model_validate(
+                    {**statics.discretization.model_dump(), "fall_integrator": fall})
+            scene = statics.model_copy(update=update)
             check_scene_consistency(scene)
         except (ConfigError, ValidationError):
             return self.scene(scenario), statics_data, statics  # raises the keyed error
@@ -285,7 +291,8 @@ class SceneFactory:
 
 def derive_model(base: Model, scene) -> Model:
     """``base`` (compiled from the statics scene) turned into the model of ``scene``, which differs from it only in
-    the sea state and the chain's tangential drag coefficient (:mod:`moor_env.envs.equilibria`).
+    the sea state, the chain's tangential drag coefficient and the fall's integrator
+    (:mod:`moor_env.envs.equilibria`; the Simulator reads the last from ``model.scene`` at the release).
 
     Neither enters the compiled arrays except the material table's ``MF_CDT`` column (the sea state is read from
     ``model.scene`` by the Simulator; the time-step bound uses normal drag only). The test suite checks that the
@@ -438,7 +445,9 @@ class InstallationCore:
         disc = DiscretizationConfig.model_validate({**statics.discretization.model_dump(), **keys})
         base = self._compiled(self.statics_key + json.dumps(keys, sort_keys=True),
                               statics.model_copy(update={"discretization": disc}))
-        return derive_model(base, self.sim.model.scene.model_copy(update={"discretization": disc}))
+        episode = self.sim.model.scene
+        disc = disc.model_copy(update={"fall_integrator": episode.discretization.fall_integrator})
+        return derive_model(base, episode.model_copy(update={"discretization": disc}))
 
     def _line_speed_m_s(self) -> float:
         """Speed of the fastest free node of the vertical chain and the mooring line [m/s]."""

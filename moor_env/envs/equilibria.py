@@ -73,7 +73,8 @@ def plain_copy(data: Any) -> Any:
 
 
 def statics_scene_dict(scene_data: dict[str, Any], chain_material: str, nominal_chain_cd_t: float) -> dict[str, Any]:
-    """The scene mapping the equilibrium is solved for: sea state calm, no pre-release rates, nominal Cd_t."""
+    """The scene mapping the equilibrium is solved for: sea state calm, no pre-release rates, nominal Cd_t, no
+    fall integrator."""
     data = plain_copy(scene_data)
     data["environment"]["sea_state"] = {}
     inst = data["installation"]
@@ -81,6 +82,7 @@ def statics_scene_dict(scene_data: dict[str, Any], chain_material: str, nominal_
     inst["spacing_rate_m_s"] = 0.0
     inst["payout_rate_m_s"] = 0.0
     data["materials"][chain_material]["cd_tangential"] = nominal_chain_cd_t
+    data.get("discretization", {}).pop("fall_integrator", None)  # the fall's: no part of the hanging state
     return data
 
 

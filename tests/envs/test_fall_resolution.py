@@ -97,3 +97,21 @@ def test_a_refused_remesh_keeps_the_preset_resolution_and_says_why(env, monkeypa
     info, loop_m = _episode(env, SCENE, [1.0, -1.0, -1.0])
     assert info["fall_resolution"].startswith("preset (remesh refused: line 'mooring_line' needs 999")
     assert loop_m == FAST["loop_chain_segment_m"] and info["touchdown"]["speed_m_s"] > 20.0
+
+
+def test_an_explicit_fall_after_the_implicit_pre_release(default_overrides, env):
+    """``fidelity.discretization.fall_integrator``: the remeshed fall runs symplectic Euler at 0.9 times its own
+    stability limit on the fall's mesh, from the same equilibrium (statics key unchanged) and pre-release phase."""
+    from moor_env.physics.integrate import INTEGRATOR_SYMPLECTIC_EULER
+    from moor_env.physics.stability import stable_time_step
+
+    explicit = gym.make("moor_env/AnchorRelease-v0",
+                        overrides={**default_overrides, "fidelity.discretization.fall_integrator": "symplectic_euler"})
+    info, loop_m = _episode(explicit, SCENE, [1.0, -1.0, -1.0])
+    sim = explicit.unwrapped.core.sim
+    assert info["fall_resolution"] == "tight_line" and loop_m == FAST["tight_line"]["loop_chain_segment_m"]
+    assert sim.integrator_code == INTEGRATOR_SYMPLECTIC_EULER
+    assert sim.dt == pytest.approx(0.9 * stable_time_step(sim.model.arrays(), "symplectic_euler")[0], rel=1e-12)
+    assert sim.dt < 1e-3 < sim.model.dt_s  # the implicit model's own step stays what it was
+    env.reset(seed=0, options=SCENE)
+    assert explicit.unwrapped.core.statics_key == env.unwrapped.core.statics_key

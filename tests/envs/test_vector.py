@@ -80,9 +80,13 @@ def test_batched_reset_mask_and_options(tiny):
     assert frame.ndim == 3
 
 
-def test_derived_model_equals_compiled(tiny):
-    """An episode's model is the cached statics model with its sea state and Cd_t: check it against a compile."""
-    core = InstallationCore(gym.make("moor_env/AnchorRelease-v0", config="tiny", overrides=tiny).unwrapped.cfg)
+@pytest.mark.parametrize("fall", [{}, {"fidelity.discretization.fall_integrator": "implicit_euler"}],
+                         ids=["scene-integrator", "fall-integrator"])
+def test_derived_model_equals_compiled(tiny, fall):
+    """An episode's model is the cached statics model with its sea state, Cd_t and fall integrator: check it
+    against a compile."""
+    core = InstallationCore(gym.make("moor_env/AnchorRelease-v0", config="tiny", overrides={**tiny, **fall}
+                                     ).unwrapped.cfg)
     rng = np.random.default_rng(0)
     for _ in range(3):
         scenario = draw_scenario(core.cfg, rng, {"sea_state_hs_m": float(rng.uniform(0.5, 3))})
