@@ -464,17 +464,18 @@ def _compile_catenary_line(scene: SceneConfig) -> Model:
     return _finish(scene, b, body_f, np.zeros((0, L.N_BODY_Q)), np.zeros(L.N_BODY_STATE), names, fair)
 
 
-def derived_time_step(model: Model, integrator: str, dt_safety: float) -> tuple[float, float, str]:
+def derived_time_step(model: Model, integrator: str, dt_safety: float, key: str = "discretization.integrator"
+                      ) -> tuple[float, float, str]:
     """The step ``integrator`` takes on ``model``'s mesh when none is set: ``dt_safety`` times its limit.
 
     Returns (step [s], largest step accepted [s], what sets it). The implicit step's limit is an accuracy cap, not
-    a stability limit: steps up to ``IMPLICIT_STABLE_MULTIPLE`` times it are accepted.
+    a stability limit: steps up to ``IMPLICIT_STABLE_MULTIPLE`` times it are accepted. An integrator the mesh
+    does not allow raises a ConfigError naming ``key``.
     """
     try:
         limit, governed = stable_time_step(model.arrays(), integrator)
     except ValueError as exc:
-        raise ConfigError("discretization.integrator", integrator, "symplectic_euler, or rk2 with axial damping",
-                          str(exc)) from None
+        raise ConfigError(key, integrator, "symplectic_euler, or rk2 with axial damping", str(exc)) from None
     if not math.isfinite(limit):
         limit = 0.01  # anchor alone: the rigid body has no stiff mode; resolve the fall finely
         governed = "anchor-only default"
@@ -492,7 +493,8 @@ def fall_time_step(model: Model) -> tuple[str, float] | None:
     disc = model.scene.discretization
     if disc.fall_integrator is None or disc.fall_integrator == model.integrator:
         return None
-    return disc.fall_integrator, derived_time_step(model, disc.fall_integrator, disc.dt_safety)[0]
+    return disc.fall_integrator, derived_time_step(model, disc.fall_integrator, disc.dt_safety,
+                                                   "discretization.fall_integrator")[0]
 
 
 def _set_time_step(model: Model, scene: SceneConfig) -> None:

@@ -120,6 +120,8 @@ class Simulator:
                               line_i=model.line_i.copy(), line_f=model.line_f.copy())
         self.dt = model.dt_s
         self.integrator_code = integrator_code(model.integrator)
+        self.fall_integration = fall_time_step(model)  # (integrator, step [s]) of the fall, or None; checked here, not
+        # at the release, so that a fall integrator the mesh does not allow is refused before any step
         self.vessel_mean_m = model.vessel_base_m.copy()
         self.tracks = np.zeros((1, 2, 6))
         self.sea = _sea_components(model.scene)
@@ -244,10 +246,9 @@ class Simulator:
         if st.released:
             return
         self._loads_of = None
-        fall = fall_time_step(m)
-        if fall is not None:
-            self.integrator_code = integrator_code(fall[0])
-            self.dt = fall[1]
+        if self.fall_integration is not None:
+            self.integrator_code = integrator_code(self.fall_integration[0])
+            self.dt = self.fall_integration[1]
         if m.release_node >= 0:
             self.release_point_m = st.node_pos[m.release_node].copy()
             st.node_i[m.release_node, L.NI_KIND] = L.NODE_FREE

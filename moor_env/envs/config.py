@@ -129,7 +129,8 @@ class ControlConfig(_Strict):
         None, gt=0.0, le=0.5,
         description="integration step before the release (warm-up, control, hold) with the implicit integrator "
                     "[s]; each advance takes the whole number of equal steps nearest below it, never finer than "
-                    "the scene's step; null: the scene's step. The fall always uses the scene's step")
+                    "the scene's step; null: the scene's step. The fall uses the scene's step (or that of "
+                    "discretization.fall_integrator, where set)")
     pre_release_dt_calm_s: float | None = Field(
         None, gt=0.0, le=0.5,
         description="pre_release_dt_s for a sea without waves (Hs 0), where the loop moves only with the "
