@@ -11,8 +11,9 @@ release at a random step between 25 and 55). It is run with the fall's step at e
 the pre-release phase and the state at the release are the same bit for bit; the finest factor is the
 reference, or with ``--explicit-reference`` the same fall integrated by symplectic Euler at 0.9 times its
 stability limit (``fidelity.discretization.fall_integrator: symplectic_euler``: the integrator of the validated
-``default`` fidelity; about 0.17 ms on the 0.5 m loop chain). Compared: touchdown speed and tilt. Two neighbouring factors that agree with each other and not with
-the coarser ones show the step the fall converges at.
+``default`` fidelity; about 0.17 ms on the 0.5 m loop chain). Compared: touchdown speed and tilt. Two
+neighbouring factors that agree with each other and not with the coarser ones show the step the fall converges
+at.
 """
 
 from __future__ import annotations

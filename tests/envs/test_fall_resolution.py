@@ -18,6 +18,8 @@ import pytest
 from moor_env.config import fidelity_presets
 from moor_env.envs import load_env_config
 from moor_env.envs.core import SceneFactory, representative_scenario
+from moor_env.physics.integrate import INTEGRATOR_SYMPLECTIC_EULER
+from moor_env.physics.stability import stable_time_step
 
 SCENE = {"water_depth_m": 500.0, "vessel_spacing_over_depth": 0.1, "mooring_line_length_over_depth": 1.08,
          "current_scale": 0.0, "sea_state_hs_m": 0.0}
@@ -102,9 +104,6 @@ def test_a_refused_remesh_keeps_the_preset_resolution_and_says_why(env, monkeypa
 def test_an_explicit_fall_after_the_implicit_pre_release(default_overrides, env):
     """``fidelity.discretization.fall_integrator``: the remeshed fall runs symplectic Euler at 0.9 times its own
     stability limit on the fall's mesh, from the same equilibrium (statics key unchanged) and pre-release phase."""
-    from moor_env.physics.integrate import INTEGRATOR_SYMPLECTIC_EULER
-    from moor_env.physics.stability import stable_time_step
-
     explicit = gym.make("moor_env/AnchorRelease-v0",
                         overrides={**default_overrides, "fidelity.discretization.fall_integrator": "symplectic_euler"})
     info, loop_m = _episode(explicit, SCENE, [1.0, -1.0, -1.0])
