@@ -1,0 +1,206 @@
+"""The env's fall and resolution choices in waves against the explicit reference fall, and why the implicit fall
+lands slower and more tilted.
+
+Run from the repository root: ``python benchmarks/fall_reference.py [--episodes 24] [--calm] [--trace-seed 1002]``.
+Writes ``benchmarks/results/fall_reference.json`` (``fall_reference_calm.json`` with ``--calm``) and the figure
+``docs/fall-snap.png``.
+
+Each episode draws its scenario from the default config (seeds 1000, 1001, ...; with waves unless ``--calm``) and
+is driven by the seeded random controls of ``benchmarks/pre_release_step.py``. Cases:
+
+* ``reference``: the env's tight_line resolution throughout (1/0.5/50/100 m, what ``fast`` runs in waves) with
+  the fall integrated explicitly (symplectic Euler at 0.9 times its stability limit, about 0.17 ms;
+  ``fidelity.discretization.fall_integrator: symplectic_euler``), the integrator of the validated ``default``
+  fidelity;
+* ``default``: what the env does (the same, with the implicit fall at the scene's 5.6 ms step);
+* ``coarse throughout``: the coarse resolution (2/2/20/30 m) before and after the release, implicit;
+* ``coarse, fine fall``: coarse before the release, remeshed onto tight_line for the implicit fall;
+* ``coarse, explicit fall``: coarse throughout with the explicit fall (on 2 m chain, about 0.7 ms).
+
+Compared with the reference: touchdown speed and tilt per episode (absolute differences, and the signed mean of
+the speed difference), and how many episodes land fast and vertical (``FAST_M_S`` or faster, under
+``VERTICAL_DEG``). CPU per episode excludes the reset (the equilibrium solve of a new scenario is cached by an
+untimed reset first).
+
+The trace (``--trace-seed``) records, every 10 ms of the fall, the anchor's tilt and the tension of the vertical
+chain's bottom segment (the one on the anchor) for the reference, the default and the default at a quarter of its
+step.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from tqdm.auto import tqdm
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import gymnasium as gym  # noqa: E402
+from _machine import run_record, write_results  # noqa: E402
+from fall_step import EXPLICIT_FALL, scale_fall_step  # noqa: E402
+from pre_release_step import ENV_ID, run_episode  # noqa: E402
+
+import moor_env  # noqa: E402, F401 - registers the envs
+from moor_env.config import fidelity_presets, tight_line_keys  # noqa: E402
+from moor_env.envs import anchor_release, core as envcore  # noqa: E402
+from moor_env.physics import layout as L  # noqa: E402
+
+RESULTS = ROOT / "benchmarks" / "results" / "fall_reference.json"
+FIGURE = ROOT / "docs" / "fall-snap.png"
+TIGHT = tight_line_keys(fidelity_presets()["fast"]["tight_line"])
+FAST_M_S = 25.8  # the reference's clean landings reach 25.9-26.5 m/s on the default geometry
+VERTICAL_DEG = 1.0
+TRACE_INTERVAL_S = 0.01
+# name, env overrides, pre-release resolution forced ({}: coarse; None: the env's), fall resolution (False: env's)
+CASES = (
+    ("reference", EXPLICIT_FALL, None, False),
+    ("default", {}, None, False),
+    ("coarse throughout", {}, {}, None),
+    ("coarse, fine fall", {}, {}, TIGHT),
+    ("coarse, explicit fall", EXPLICIT_FALL, {}, None),
+)
+
+
+def make_env(overrides: dict, pre_release, fall):
+    """The env of a case: the resolution choices of its factory forced where asked."""
+    env = gym.make(ENV_ID, overrides=overrides)
+    factory = env.unwrapped.core.factory
+    if pre_release is not None:
+        factory.pre_release_resolution = lambda scenario: dict(pre_release)
+    if fall is not False:
+        factory.fall_resolution = lambda scene, spacing_m, length_m, speed_m_s: None if fall is None else dict(fall)
+    return env
+
+
+def timed_episode(env, seed: int) -> dict:
+    """:func:`run_episode` after an untimed reset of the same seed (which solves or loads the equilibrium)."""
+    env.reset(seed=seed)
+    cpu0 = time.process_time()
+    row = run_episode(env, seed)
+    row["cpu_s"] = time.process_time() - cpu0
+    return row
+
+
+def summary(rows: list[dict], case: str, reference: str) -> dict:
+    """Differences to the reference over the episodes where both touched down."""
+    by_seed = {r["seed"]: r for r in rows if r["case"] == reference}
+    mine = [r for r in rows if r["case"] == case]
+    pairs = [(r, by_seed[r["seed"]]) for r in mine
+             if r["speed_m_s"] is not None and by_seed[r["seed"]]["speed_m_s"] is not None]
+    dv = np.array([r["speed_m_s"] - ref["speed_m_s"] for r, ref in pairs])
+    dt = np.abs([r["tilt_deg"] - ref["tilt_deg"] for r, ref in pairs])
+    return {"episodes": len(pairs), "failures": sum(r["status"] != "touchdown" for r in mine),
+            "fast_and_vertical": sum(1 for r in mine if r["speed_m_s"] is not None and r["speed_m_s"] >= FAST_M_S
+                                     and r["tilt_deg"] < VERTICAL_DEG),
+            "cpu_s_median": float(np.median([r["cpu_s"] for r in mine])),
+            "dspeed_m_s": {"median": float(np.median(np.abs(dv))), "p90": float(np.percentile(np.abs(dv), 90)),
+                           "signed_mean": float(dv.mean())},
+            "dtilt_deg": {"median": float(np.median(dt)), "p90": float(np.percentile(dt, 90))}}
+
+
+def trace_fall(env, seed: int) -> dict:
+    """One episode with the fall recorded every ``TRACE_INTERVAL_S``: time since the release [s], tilt [deg],
+    tension of the segment on the anchor [N]."""
+    core = env.unwrapped.core
+    samples: list[tuple[float, float, float]] = []
+    plain = anchor_release.run_advance
+
+    def recording(core_, adv, chunk_s=None, on_chunk=None):
+        if adv.phase != envcore.PHASE_FALL:
+            return plain(core_, adv, chunk_s, on_chunk)
+        t0 = core_.sim.state.t
+
+        def record():
+            sim = core_.sim
+            sim.evaluate_loads()
+            chain = core_.lines["vertical_chain"]
+            st = sim.state
+            first = st.line_i[chain, L.LI_SEG_START]  # segments run bottom up: the first one hangs on the anchor
+            samples.append((st.t - t0, sim.tilt_deg(), float(sim.work.seg_tension[first])))
+
+        return plain(core_, adv, TRACE_INTERVAL_S, record)
+
+    anchor_release.run_advance = recording
+    try:
+        row = run_episode(env, seed)
+    finally:
+        anchor_release.run_advance = plain
+    assert core.sim is not None
+    return {"speed_m_s": row["speed_m_s"], "tilt_deg": row["tilt_deg"], "samples": samples}
+
+
+def plot_traces(traces: dict[str, dict], seed: int, path: Path) -> None:
+    """Tilt and the anchor's chain tension against time since the release, one line per run."""
+    import matplotlib  # noqa: PLC0415
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    fig, (ax_tilt, ax_t) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    for k, (name, tr) in enumerate(traces.items()):
+        s = np.array(tr["samples"])
+        label = f"{name}: {tr['speed_m_s']:.2f} m/s, {tr['tilt_deg']:.2f} deg"
+        style = {"lw": 4, "alpha": 0.4} if k == 0 else {"lw": 1.2}  # the reference wide, under the others
+        ax_tilt.plot(s[:, 0], s[:, 1], label=label, **style)
+        ax_t.plot(s[:, 0], s[:, 2] / 1e3, **style)
+    ax_tilt.set_ylabel("anchor tilt [deg]")
+    ax_tilt.legend(fontsize=8)
+    ax_t.set_ylabel("tension of the chain segment\non the anchor [kN]")
+    ax_t.set_xlabel("time since the release [s]")
+    fig.suptitle(f"Fall of episode {seed} (waves): at 5.6 ms the implicit chain goes taut on the anchor",
+                 fontsize=10)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=90)
+    print(f"written {path}")
+
+
+def main(argv: list[str] | None = None) -> dict:
+    """Run every case on every episode and the trace; write the JSON and the figure, print a table."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--episodes", type=int, default=24)
+    parser.add_argument("--calm", action="store_true", help="no waves (Hs 0); writes fall_reference_calm.json")
+    parser.add_argument("--trace-seed", type=int, default=1002, help="episode whose fall is traced (-1: none)")
+    args = parser.parse_args(argv)
+    load_before = os.getloadavg()[0]
+    sea = {"scenario.sea_state_hs_m": 0.0} if args.calm else {}
+    envs = {name: make_env({**sea, **ov}, pre, fall) for name, ov, pre, fall in CASES}
+    rows = []
+    for seed in tqdm(range(1000, 1000 + args.episodes), desc="episodes"):
+        for name, env in envs.items():
+            rows.append({"case": name, **timed_episode(env, seed)})
+    reference = CASES[0][0]
+    result = {**run_record(load_before),
+              "config": "anchor-release (default), scenarios drawn with seeds 1000.." + (", Hs 0" if args.calm else ""),
+              "reference": "tight_line throughout, explicit fall (symplectic Euler, 0.9x its limit)",
+              "fast_and_vertical": f"speed >= {FAST_M_S} m/s and tilt < {VERTICAL_DEG} deg",
+              "summary": {name: summary(rows, name, reference) for name, *_ in CASES}, "rows": rows}
+    if args.trace_seed >= 0:
+        runs = {"reference (explicit fall)": make_env({**sea, **EXPLICIT_FALL}, None, False),
+                "default (implicit, 5.6 ms)": make_env(sea, None, False),
+                "implicit at 1.4 ms": make_env(sea, None, False)}
+        scale_fall_step(runs["implicit at 1.4 ms"].unwrapped.core, 0.25)
+        traces = {name: trace_fall(env, args.trace_seed) for name, env in runs.items()}
+        result["trace"] = {"seed": args.trace_seed, "interval_s": TRACE_INTERVAL_S, "runs": traces}
+        if not args.calm:
+            plot_traces(traces, args.trace_seed, FIGURE)
+    write_results(RESULTS.with_name("fall_reference" + ("_calm" if args.calm else "") + ".json"), result)
+    print("| case | episodes | failures | speed diff median / p90 [m/s] | signed mean [m/s] | tilt diff median / p90 "
+          "[deg] | fast and vertical | CPU s/episode |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name, s in result["summary"].items():
+        print(f"| {name} | {s['episodes']} | {s['failures']} | {s['dspeed_m_s']['median']:.3f} / "
+              f"{s['dspeed_m_s']['p90']:.3f} | {s['dspeed_m_s']['signed_mean']:+.3f} | {s['dtilt_deg']['median']:.2f} / "
+              f"{s['dtilt_deg']['p90']:.2f} | {s['fast_and_vertical']} of {args.episodes} | {s['cpu_s_median']:.3f} |")
+    return result
+
+
+if __name__ == "__main__":
+    main()
