@@ -42,19 +42,18 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-import gymnasium as gym  # noqa: E402
 from _machine import run_record, write_results  # noqa: E402
 from fall_step import EXPLICIT_FALL, scale_fall_step  # noqa: E402
-from pre_release_step import ENV_ID, run_episode  # noqa: E402
+from pre_release_step import run_episode  # noqa: E402
+from remesh_at_release import TIGHT, make_case_env  # noqa: E402
 
 import moor_env  # noqa: E402, F401 - registers the envs
-from moor_env.config import fidelity_presets, tight_line_keys  # noqa: E402
-from moor_env.envs import anchor_release, core as envcore  # noqa: E402
+from moor_env.envs import anchor_release  # noqa: E402
+from moor_env.envs import core as envcore  # noqa: E402
 from moor_env.physics import layout as L  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results" / "fall_reference.json"
 FIGURE = ROOT / "docs" / "fall-snap.png"
-TIGHT = tight_line_keys(fidelity_presets()["fast"]["tight_line"])
 FAST_M_S = 25.8  # the reference's clean landings reach 25.9-26.5 m/s on the default geometry
 VERTICAL_DEG = 1.0
 TRACE_INTERVAL_S = 0.01
@@ -66,17 +65,6 @@ CASES = (
     ("coarse, fine fall", {}, {}, TIGHT),
     ("coarse, explicit fall", EXPLICIT_FALL, {}, None),
 )
-
-
-def make_env(overrides: dict, pre_release, fall):
-    """The env of a case: the resolution choices of its factory forced where asked."""
-    env = gym.make(ENV_ID, overrides=overrides)
-    factory = env.unwrapped.core.factory
-    if pre_release is not None:
-        factory.pre_release_resolution = lambda scenario: dict(pre_release)
-    if fall is not False:
-        factory.fall_resolution = lambda scene, spacing_m, length_m, speed_m_s: None if fall is None else dict(fall)
-    return env
 
 
 def timed_episode(env, seed: int) -> dict:
@@ -171,7 +159,7 @@ def main(argv: list[str] | None = None) -> dict:
     args = parser.parse_args(argv)
     load_before = os.getloadavg()[0]
     sea = {"scenario.sea_state_hs_m": 0.0} if args.calm else {}
-    envs = {name: make_env({**sea, **ov}, pre, fall) for name, ov, pre, fall in CASES}
+    envs = {name: make_case_env({**sea, **ov}, pre, fall) for name, ov, pre, fall in CASES}
     rows = []
     for seed in tqdm(range(1000, 1000 + args.episodes), desc="episodes"):
         for name, env in envs.items():
@@ -183,9 +171,9 @@ def main(argv: list[str] | None = None) -> dict:
               "fast_and_vertical": f"speed >= {FAST_M_S} m/s and tilt < {VERTICAL_DEG} deg",
               "summary": {name: summary(rows, name, reference) for name, *_ in CASES}, "rows": rows}
     if args.trace_seed >= 0:
-        runs = {"reference (explicit fall)": make_env({**sea, **EXPLICIT_FALL}, None, False),
-                "default (implicit, 5.6 ms)": make_env(sea, None, False),
-                "implicit at 1.4 ms": make_env(sea, None, False)}
+        runs = {"reference (explicit fall)": make_case_env({**sea, **EXPLICIT_FALL}, None, False),
+                "default (implicit, 5.6 ms)": make_case_env(sea, None, False),
+                "implicit at 1.4 ms": make_case_env(sea, None, False)}
         scale_fall_step(runs["implicit at 1.4 ms"].unwrapped.core, 0.25)
         traces = {name: trace_fall(env, args.trace_seed) for name, env in runs.items()}
         result["trace"] = {"seed": args.trace_seed, "interval_s": TRACE_INTERVAL_S, "runs": traces}
@@ -196,9 +184,10 @@ def main(argv: list[str] | None = None) -> dict:
           "[deg] | fast and vertical | CPU s/episode |")
     print("|---|---|---|---|---|---|---|---|")
     for name, s in result["summary"].items():
-        print(f"| {name} | {s['episodes']} | {s['failures']} | {s['dspeed_m_s']['median']:.3f} / "
-              f"{s['dspeed_m_s']['p90']:.3f} | {s['dspeed_m_s']['signed_mean']:+.3f} | {s['dtilt_deg']['median']:.2f} / "
-              f"{s['dtilt_deg']['p90']:.2f} | {s['fast_and_vertical']} of {args.episodes} | {s['cpu_s_median']:.3f} |")
+        speed, tilt = s["dspeed_m_s"], s["dtilt_deg"]
+        print(f"| {name} | {s['episodes']} | {s['failures']} | {speed['median']:.3f} / {speed['p90']:.3f} | "
+              f"{speed['signed_mean']:+.3f} | {tilt['median']:.2f} / {tilt['p90']:.2f} | "
+              f"{s['fast_and_vertical']} of {args.episodes} | {s['cpu_s_median']:.3f} |")
     return result
 
 

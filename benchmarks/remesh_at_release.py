@@ -72,8 +72,10 @@ CASES = (
 )
 
 
-def _make(overrides: dict, pre_release, fall, late: bool):
-    """The env of a case (see the module docstring)."""
+def make_case_env(overrides: dict, pre_release, fall, late: bool = False):
+    """The env of a case (see the module docstring): ``pre_release`` / ``fall`` force the resolution keys of the
+    factory's choice (None / False: the env's own; ``fall`` None: the preset's), ``late`` releases one scene step
+    late."""
     env = gym.make(ENV_ID, overrides=overrides)
     factory = env.unwrapped.core.factory
     if pre_release is not None:
@@ -131,7 +133,8 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--episodes", type=int, default=12)
     args = parser.parse_args(argv)
     load_before = os.getloadavg()[0]
-    envs = {(part, name): _make(ov, pre, fall, name.startswith("reference")) for part, name, ov, pre, fall in CASES}
+    envs = {(part, name): make_case_env(ov, pre, fall, name.startswith("reference"))
+            for part, name, ov, pre, fall in CASES}
     rows = []
     for seed in tqdm(range(2000, 2000 + args.episodes), desc="episodes"):
         ref: dict[str, dict] = {}
