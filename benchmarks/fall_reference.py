@@ -22,9 +22,11 @@ the speed difference), and how many episodes land fast and vertical (``FAST_M_S`
 ``VERTICAL_DEG``). CPU per episode excludes the reset (the equilibrium solve of a new scenario is cached by an
 untimed reset first).
 
-The trace (``--trace-seed``) records, every 10 ms of the fall, the anchor's tilt and the tension of the vertical
-chain's bottom segment (the one on the anchor) for the reference, the default and the default at a quarter of its
-step.
+The trace (``--trace-seed``) records, every 10 ms of the fall, the anchor's tilt, the tension of the vertical
+chain's bottom segment (the one on the anchor) and how far the chain has fallen past the anchor's back end
+(``Simulator.line_past_back_end_m``; also recorded at every touchdown: the lines have no contact with the
+anchor's body, so a chain that falls faster than the anchor passes into it) for the reference, the default and the
+default at a quarter of its step.
 """
 
 from __future__ import annotations
@@ -68,18 +70,21 @@ CASES = (
 
 
 def timed_episode(env, seed: int) -> dict:
-    """:func:`run_episode` after an untimed reset of the same seed (which solves or loads the equilibrium)."""
+    """:func:`run_episode` after an untimed reset of the same seed (which solves or loads the equilibrium), with
+    ``Simulator.line_past_back_end_m`` of the vertical chain at the end (at touchdown)."""
     env.reset(seed=seed)
     cpu0 = time.process_time()
     row = run_episode(env, seed)
     row["cpu_s"] = time.process_time() - cpu0
+    row["chain_past_back_end_m"], row["chain_off_axis_m"] = env.unwrapped.core.sim.line_past_back_end_m(
+        "vertical_chain")
     return row
 
 
-def summary(rows: list[dict], case: str, reference: str) -> dict:
-    """Differences to the reference over the episodes where both touched down."""
+def summary(rows: list[dict], case: str, reference: str, seeds: set[int] | None = None) -> dict:
+    """Differences to the reference over the episodes (of ``seeds``, default all) where both touched down."""
     by_seed = {r["seed"]: r for r in rows if r["case"] == reference}
-    mine = [r for r in rows if r["case"] == case]
+    mine = [r for r in rows if r["case"] == case and (seeds is None or r["seed"] in seeds)]
     pairs = [(r, by_seed[r["seed"]]) for r in mine
              if r["speed_m_s"] is not None and by_seed[r["seed"]]["speed_m_s"] is not None]
     dv = np.array([r["speed_m_s"] - ref["speed_m_s"] for r, ref in pairs])
@@ -88,6 +93,8 @@ def summary(rows: list[dict], case: str, reference: str) -> dict:
             "fast_and_vertical": sum(1 for r in mine if r["speed_m_s"] is not None and r["speed_m_s"] >= FAST_M_S
                                      and r["tilt_deg"] < VERTICAL_DEG),
             "cpu_s_median": float(np.median([r["cpu_s"] for r in mine])),
+            "chain_past_back_end_at_touchdown": sum(1 for r in mine if r["chain_past_back_end_m"] > 0.0),
+            "chain_past_back_end_m_median": float(np.median([r["chain_past_back_end_m"] for r in mine])),
             "dspeed_m_s": {"median": float(np.median(np.abs(dv))), "p90": float(np.percentile(np.abs(dv), 90)),
                            "signed_mean": float(dv.mean())},
             "dtilt_deg": {"median": float(np.median(dt)), "p90": float(np.percentile(dt, 90))}}
@@ -95,7 +102,7 @@ def summary(rows: list[dict], case: str, reference: str) -> dict:
 
 def trace_fall(env, seed: int) -> dict:
     """One episode with the fall recorded every ``TRACE_INTERVAL_S``: time since the release [s], tilt [deg],
-    tension of the segment on the anchor [N]."""
+    tension of the segment on the anchor [N] and ``Simulator.line_past_back_end_m`` of the vertical chain [m, m]."""
     core = env.unwrapped.core
     samples: list[tuple[float, float, float]] = []
     plain = anchor_release.run_advance
@@ -111,7 +118,8 @@ def trace_fall(env, seed: int) -> dict:
             chain = core_.lines["vertical_chain"]
             st = sim.state
             first = st.line_i[chain, L.LI_SEG_START]  # segments run bottom up: the first one hangs on the anchor
-            samples.append((st.t - t0, sim.tilt_deg(), float(sim.work.seg_tension[first])))
+            samples.append((st.t - t0, sim.tilt_deg(), float(sim.work.seg_tension[first]),
+                            *sim.line_past_back_end_m("vertical_chain")))
 
         return plain(core_, adv, TRACE_INTERVAL_S, record)
 
@@ -131,19 +139,23 @@ def plot_traces(traces: dict[str, dict], seed: int, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # noqa: PLC0415
 
-    fig, (ax_tilt, ax_t) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    fig, (ax_tilt, ax_t, ax_c) = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
     for k, (name, tr) in enumerate(traces.items()):
         s = np.array(tr["samples"])
         label = f"{name}: {tr['speed_m_s']:.2f} m/s, {tr['tilt_deg']:.2f} deg"
         style = {"lw": 4, "alpha": 0.4} if k == 0 else {"lw": 1.2}  # the reference wide, under the others
         ax_tilt.plot(s[:, 0], s[:, 1], label=label, **style)
         ax_t.plot(s[:, 0], s[:, 2] / 1e3, **style)
+        line = ax_c.plot(s[:, 0], s[:, 3], **style)[0]
+        ax_c.plot(s[:, 0], s[:, 4], ls=":", color=line.get_color(), **style)
     ax_tilt.set_ylabel("anchor tilt [deg]")
     ax_tilt.legend(fontsize=8)
-    ax_t.set_ylabel("tension of the chain segment\non the anchor [kN]")
-    ax_t.set_xlabel("time since the release [s]")
-    fig.suptitle(f"Fall of episode {seed} (waves): at 5.6 ms the implicit chain goes taut on the anchor",
-                 fontsize=10)
+    ax_t.set_ylabel("chain tension\non the anchor [kN]")
+    ax_c.axhline(0.0, color="0.5", lw=0.8)
+    ax_c.set_ylabel("chain past the back end [m]\nsolid: along the axis\ndotted: off the axis")
+    ax_c.set_xlabel("time since the release [s]")
+    fig.suptitle(f"Fall of episode {seed} (waves): the chain falls into the anchor's back end and, at 5.6 ms,\n"
+                 "buckles off its axis and pulls the back end sideways", fontsize=10)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=90)
@@ -169,7 +181,16 @@ def main(argv: list[str] | None = None) -> dict:
               "config": "anchor-release (default), scenarios drawn with seeds 1000.." + (", Hs 0" if args.calm else ""),
               "reference": "tight_line throughout, explicit fall (symplectic Euler, 0.9x its limit)",
               "fast_and_vertical": f"speed >= {FAST_M_S} m/s and tilt < {VERTICAL_DEG} deg",
-              "summary": {name: summary(rows, name, reference) for name, *_ in CASES}, "rows": rows}
+              "summary": {name: summary(rows, name, reference) for name, *_ in CASES}}
+    # the reference's falls split by where its chain ends: past the anchor's back end (fallen into the body,
+    # see Simulator.line_past_back_end_m) or behind it
+    through = {r["seed"] for r in rows if r["case"] == reference and r["chain_past_back_end_m"] > 0.0}
+    behind = {r["seed"] for r in rows if r["case"] == reference} - through
+    for part, seeds in (("reference_chain_through_anchor", through), ("reference_chain_behind_anchor", behind)):
+        if seeds:
+            result[f"summary_{part}"] = {"seeds": sorted(seeds),
+                                         **{name: summary(rows, name, reference, seeds) for name, *_ in CASES}}
+    result["rows"] = rows
     if args.trace_seed >= 0:
         runs = {"reference (explicit fall)": make_case_env({**sea, **EXPLICIT_FALL}, None, False),
                 "default (implicit, 5.6 ms)": make_case_env(sea, None, False),
@@ -181,13 +202,24 @@ def main(argv: list[str] | None = None) -> dict:
             plot_traces(traces, args.trace_seed, FIGURE)
     write_results(RESULTS.with_name("fall_reference" + ("_calm" if args.calm else "") + ".json"), result)
     print("| case | episodes | failures | speed diff median / p90 [m/s] | signed mean [m/s] | tilt diff median / p90 "
-          "[deg] | fast and vertical | CPU s/episode |")
-    print("|---|---|---|---|---|---|---|---|")
+          "[deg] | fast and vertical | chain past the back end at touchdown (episodes, median m) | CPU s/episode |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for name, s in result["summary"].items():
         speed, tilt = s["dspeed_m_s"], s["dtilt_deg"]
         print(f"| {name} | {s['episodes']} | {s['failures']} | {speed['median']:.3f} / {speed['p90']:.3f} | "
               f"{speed['signed_mean']:+.3f} | {tilt['median']:.2f} / {tilt['p90']:.2f} | "
-              f"{s['fast_and_vertical']} of {args.episodes} | {s['cpu_s_median']:.3f} |")
+              f"{s['fast_and_vertical']} of {args.episodes} | {s['chain_past_back_end_at_touchdown']}, "
+              f"{s['chain_past_back_end_m_median']:+.2f} | {s['cpu_s_median']:.3f} |")
+    for part in ("through", "behind"):
+        split = result.get(f"summary_reference_chain_{part}_anchor")
+        if split is None:
+            continue
+        print(f"\nepisodes whose reference chain ends {part} the anchor ({len(split['seeds'])}): speed diff median / "
+              "p90, signed mean [m/s]; tilt diff median / p90 [deg]")
+        for name, *_ in CASES[1:]:
+            speed, tilt = split[name]["dspeed_m_s"], split[name]["dtilt_deg"]
+            print(f"| {name} | {speed['median']:.3f} / {speed['p90']:.3f} | {speed['signed_mean']:+.3f} | "
+                  f"{tilt['median']:.2f} / {tilt['p90']:.2f} |")
     return result
 
 

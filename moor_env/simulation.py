@@ -277,6 +277,26 @@ class Simulator:
         ez = self.state.body_state[L.BS_AXIS + 2]
         return math.degrees(math.acos(min(1.0, max(-1.0, -ez))))
 
+    def line_past_back_end_m(self, line: str) -> tuple[float, float]:
+        """How far ``line`` reaches past the anchor's back end: the largest distance of one of its nodes beyond the
+        back end along the anchor's axis towards the tip [m] (negative: every node is behind the back end), and
+        that node's distance from the axis [m].
+
+        Why: the lines have no contact with the anchor's body. A chain that falls faster than the anchor (lengthwise,
+        with the seed's tangential drag, it does) reaches the back end during the fall and passes into the body
+        instead of piling onto it; where this happens, the touchdown rests on a part of the fall the model does not
+        represent (README, "Accuracy of the fall").
+        """
+        st, m = self.state, self.model
+        idx = m.lines[line].index
+        first = st.line_i[idx, L.LI_SEG_START]
+        nodes = st.seg_i[first:first + st.line_i[idx, L.LI_NSEG], L.SI_B]
+        axis = st.body_state[L.BS_AXIS:L.BS_AXIS + 3]
+        rel = st.node_pos[nodes] - (self.tip_state()[0] - m.body_f[L.BF_LENGTH] * axis)
+        along = rel @ axis
+        k = int(np.argmax(along))
+        return float(along[k]), float(np.linalg.norm(rel[k] - along[k] * axis))
+
     def top_tensions_n(self) -> dict[str, float]:
         """Load of each line on its vessel (top-segment tension plus the top half-segment's weight and drag),
         or the top segment's tension for a line ending at a connection node [N], at the current state
@@ -459,6 +479,7 @@ class DropResult:
     release_point_m: list[float] | None
     release_time_s: float
     chain_on_seabed_m: float
+    chain_past_back_end_m: float | None  # Simulator.line_past_back_end_m of the vertical chain, at the end
     max_tension_n: dict[str, float]
     n_nodes: int
     n_steps: int
@@ -560,6 +581,8 @@ def run_drop(sim: Simulator, wall_static_s: float = 0.0, keep_snapshots: bool = 
         release_point_m=None if sim.release_point_m is None else [float(v) for v in sim.release_point_m],
         release_time_s=float(sim.release_time_s),
         chain_on_seabed_m=sim.line_length_on_seabed_m(chain),
+        chain_past_back_end_m=sim.line_past_back_end_m("vertical_chain")[0]
+        if sim.model.body_active and "vertical_chain" in sim.model.lines else None,
         max_tension_n=max_tension,
         n_nodes=int(np.sum(sim.state.node_i[:, L.NI_KIND] != L.NODE_INACTIVE)),
         n_steps=n_steps, dt_s=sim.dt, wall_static_s=wall_static_s, wall_dynamic_s=wall,

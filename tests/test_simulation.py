@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from moor_env import SimulationDiverged, load_scene, simulate_drop, solve_statics
+from moor_env.physics import layout as L
 
 
 def test_same_scene_gives_bit_identical_results():
@@ -49,8 +50,8 @@ def test_cli_drop_json_has_the_interface_keys(tmp_path):
                            "--plot", str(plot)], capture_output=True, text=True, check=True)
     data = json.loads(proc.stdout)
     for key in ("touchdown_time_s", "touchdown_speed_m_s", "touchdown_vertical_speed_m_s", "tilt_deg", "drift_m",
-                "release_point_m", "chain_on_seabed_m", "max_tension_n", "n_nodes", "n_steps", "dt_s",
-                "wall_static_s", "wall_dynamic_s"):
+                "release_point_m", "chain_on_seabed_m", "chain_past_back_end_m", "max_tension_n", "n_nodes",
+                "n_steps", "dt_s", "wall_static_s", "wall_dynamic_s"):
         assert key in data
     assert plot.stat().st_size > 10_000
 
@@ -130,6 +131,23 @@ def test_state_copy_into_reuses_matching_arrays_and_copies_otherwise():
     fresh = other.copy_into(backup)  # other node count: a new copy, the target untouched
     assert fresh is not backup and np.array_equal(fresh.node_pos, other.node_pos)
     assert np.array_equal(backup.node_pos, state.node_pos)
+
+
+def test_line_past_back_end_measures_along_and_off_the_anchor_axis():
+    """Geometry of ``Simulator.line_past_back_end_m`` (reference: a node placed by hand, exact to 1e-9 m)."""
+    sim = solve_statics(load_scene("vertical-chain")).simulator
+    st, m = sim.state, sim.model
+    along, off = sim.line_past_back_end_m("vertical_chain")
+    seg_m = sim.model.scene.discretization.vertical_chain_segment_m
+    assert along == pytest.approx(-seg_m, abs=0.02) and off < 0.02  # hanging straight above the back end
+    axis = st.body_state[L.BS_AXIS:L.BS_AXIS + 3].copy()
+    normal = np.cross(axis, [1.0, 0.0, 0.0])
+    normal /= np.linalg.norm(normal)
+    back = sim.tip_state()[0] - m.body_f[L.BF_LENGTH] * axis
+    chain = m.lines["vertical_chain"].index
+    node = st.seg_i[st.line_i[chain, L.LI_SEG_START] + 2, L.SI_B]  # third node up the chain
+    st.node_pos[node] = back + 0.4 * axis + 0.3 * normal
+    assert sim.line_past_back_end_m("vertical_chain") == pytest.approx((0.4, 0.3), abs=1e-9)
 
 
 def test_fall_integrator_takes_over_at_the_release():

@@ -207,14 +207,17 @@ class AnchorReleaseEnv(gym.Env):
     ``info`` holds ``reward_terms``, ``sim_status`` (running, touchdown, time limit, diverged: ..., no touchdown
     ...), ``t_s`` (time since the first observation [s]), ``released``, ``spacing_m``, ``max_tension_n`` per line,
     after the release ``fall_resolution`` (``preset``, ``tight_line``, or why the switch was refused) and at
-    touchdown ``touchdown`` (speed_m_s, vertical_speed_m_s, tilt_deg, offset_m, fall_time_s, chain_on_seabed_m);
+    touchdown ``touchdown`` (speed_m_s, vertical_speed_m_s, tilt_deg, offset_m, fall_time_s, chain_on_seabed_m,
+    chain_past_back_end_m: how far the vertical chain has fallen past the anchor's back end, positive where it has
+    passed into the body, which the model has no contact to stop; README "Accuracy of the fall");
     ``reset`` returns the ``scenario`` and where its equilibrium came from (``statics``).
 
     ## Version History
 
     * v0: initial version (issue 3): 3 actions, 27 observations, 11 reward terms. Since 2026-11-22 the fall's
       resolution is fitted at the release rather than to the geometry the controls could reach (episodes on the
-      same seed differ from earlier ones by the resolution change).
+      same seed differ from earlier ones by the resolution change). Since 2026-11-22 (later) ``info["touchdown"]``
+      also holds ``chain_past_back_end_m``.
     """
 
     metadata = {"render_modes": ["human", "rgb_array", "rgb_array_list"], "render_fps": 4}

@@ -768,7 +768,8 @@ class InstallationCore:
             terms["chain_pile"] = -rcfg.chain_pile_penalty * min(1.0, excess / rcfg.chain_pile_scale_m)
         self.touchdown = {"speed_m_s": speed, "vertical_speed_m_s": float(-vel[2]), "tilt_deg": tilt,
                           "offset_m": offset, "fall_time_s": float(td[L.TD_TIME] - sim.release_time_s),
-                          "chain_on_seabed_m": pile}
+                          "chain_on_seabed_m": pile,
+                          "chain_past_back_end_m": sim.line_past_back_end_m("vertical_chain")[0]}
 
     # --- observation -------------------------------------------------------------------------------------------
     def _fibre_clearance_m(self) -> float:
