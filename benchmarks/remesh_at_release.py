@@ -7,7 +7,7 @@ A calm scenario whose loop starts slack runs the pre-release phase on the env's 
 resolution (``fast``: 2 m chain, 20 m fibre, 30 m wire) and, at the release, moves the state onto the preset's
 ``tight_line`` resolution (1 m vertical / 0.5 m loop chain, 50 m fibre, 100 m wire) where the geometry or the
 line's motion of that moment needs it; in waves, or with a loop tight from the start, tight_line runs
-throughout. Episodes draw their scenario from the default config (seeds 2000, 2001, ...; the calm part with
+throughout (in waves with its ``in_waves`` keys: a 1 m loop chain). Episodes draw their scenario from the default config (seeds 2000, 2001, ...; the calm part with
 ``sea_state_hs_m`` 0) and are driven by seeded random controls (the policy of
 ``benchmarks/pre_release_step.py``: spacing and winch rates redrawn every 10 s, release at a random step
 25-55). Cases, each part against its own reference:
@@ -17,15 +17,16 @@ throughout. Episodes draw their scenario from the default config (seeds 2000, 20
 * calm, ``coarse, fine fall``: coarse before the release in every scenario, the fall always on tight_line
   (isolates what the coarse pre-release phase and the remesh change);
 * calm, ``coarse throughout``: never fine (what the fit saves the tight cases from);
-* waves, ``default`` (the reference): tight_line throughout;
+* waves, ``default`` (the reference): tight_line throughout, with its ``in_waves`` keys;
 * waves, ``coarse, fine fall``: the calm design applied in waves (why it is not);
-* each part's reference released one scene step (5.6 ms) later: the outcome's own sensitivity to the release
-  instant, against which the differences are to be read.
+* each part's reference released one scene step (5.6 ms calm, 11.25 ms in waves) later: the outcome's own
+  sensitivity to the release instant, against which the differences are to be read.
 
 A third part (``waves check``) is why ``fast`` takes its tight_line resolution in any waves
 (``waves_above_hs_m: 0``): the default geometry (500 m, spacing 0.1 h, line 1.08 h, no current; slack, coarse in
 calm water) held for 59 s at Hs 0-1 m, six sea-state seeds each, falling on the coarse and on the tight_line
-resolution from the same coarse pre-release state.
+resolution (with its ``in_waves`` keys above Hs 0) from the same coarse pre-release state. Against the explicit
+reference fall, ``benchmarks/fall_reference.py``.
 
 Compared with the reference: touchdown speed and tilt; CPU per episode (reset without the static solve, which
 is cached, the pre-release phase and the fall).
@@ -34,6 +35,7 @@ is cached, the pre-release phase and the fall).
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 from pathlib import Path
@@ -54,7 +56,9 @@ from moor_env.config import fidelity_presets, tight_line_keys  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results" / "remesh_at_release.json"
 ENV_ID = "moor_env/AnchorRelease-v0"
-TIGHT = tight_line_keys(fidelity_presets()["fast"]["tight_line"])
+RULE = fidelity_presets()["fast"]["tight_line"]
+TIGHT = tight_line_keys(RULE)  # calm water
+TIGHT_WAVES = tight_line_keys(RULE, math.inf)  # in waves, with the rule's in_waves keys
 FINE = {f"fidelity.discretization.{k}": v for k, v in TIGHT.items()}
 
 
@@ -67,7 +71,7 @@ CASES = (
     ("calm", "coarse throughout", CALM, {}, None),
     ("calm", "reference released one step later", {**CALM, **FINE}, None, False),
     ("waves", "default", {}, None, False),
-    ("waves", "coarse, fine fall", {}, {}, TIGHT),
+    ("waves", "coarse, fine fall", {}, {}, TIGHT_WAVES),
     ("waves", "reference released one step later", {}, None, False),
 )
 
@@ -102,7 +106,7 @@ def waves_check(seeds: int = 6) -> list[dict]:
     for hs in tqdm(WAVES_HS_M, desc="waves check"):
         for seed in range(seeds):
             row = {"hs_m": hs, "seed": seed}
-            for name, keys in (("tight_line", TIGHT), ("coarse", None)):
+            for name, keys in (("tight_line", tight_line_keys(RULE, hs)), ("coarse", None)):
                 factory.fall_resolution = lambda scene, spacing_m, length_m, speed_m_s, keys=keys: keys
                 env.reset(seed=seed, options={**WAVES_SCENE, "sea_state_hs_m": hs})
                 for _ in range(59):

@@ -487,6 +487,7 @@ def tight_line_rule(fidelity: str) -> dict[str, Any] | None:
 
 
 TIGHT_LINE_THRESHOLDS = ("slack_below_m", "chord_angle_above_deg", "waves_above_hs_m", "moving_above_m_s")
+TIGHT_LINE_IN_WAVES = "in_waves"  # tight_line entry: keys that replace its own in waves above waves_above_hs_m
 
 
 def tight_line_needed(rule: dict[str, Any], slack_m: float, chord_angle_deg: float, hs_m: float,
@@ -500,9 +501,13 @@ def tight_line_needed(rule: dict[str, Any], slack_m: float, chord_angle_deg: flo
             or hs_m > rule["waves_above_hs_m"] or line_speed_m_s > rule["moving_above_m_s"])
 
 
-def tight_line_keys(rule: dict[str, Any]) -> dict[str, Any]:
-    """The discretization keys of a ``tight_line`` rule (without its thresholds)."""
-    return {k: v for k, v in rule.items() if k not in TIGHT_LINE_THRESHOLDS}
+def tight_line_keys(rule: dict[str, Any], hs_m: float = 0.0) -> dict[str, Any]:
+    """The discretization keys of a ``tight_line`` rule (without its thresholds) for a sea of significant wave
+    height ``hs_m`` [m]: above the rule's ``waves_above_hs_m`` its ``in_waves`` keys replace the others."""
+    keys = {k: v for k, v in rule.items() if k not in TIGHT_LINE_THRESHOLDS and k != TIGHT_LINE_IN_WAVES}
+    if hs_m > rule["waves_above_hs_m"]:
+        keys.update(rule.get(TIGHT_LINE_IN_WAVES, {}))
+    return keys
 
 
 def fit_fidelity(scene: SceneConfig, data: dict[str, Any]) -> dict[str, Any] | None:
@@ -531,7 +536,7 @@ def fit_fidelity(scene: SceneConfig, data: dict[str, Any]) -> dict[str, Any] | N
         return None
     fitted = copy.deepcopy(data)
     disc = fitted.setdefault("discretization", {})
-    for key, value in tight_line_keys(rule).items():
+    for key, value in tight_line_keys(rule, scene.environment.sea_state.hs_m).items():
         disc.setdefault(key, value)
     return apply_fidelity(fitted)
 

@@ -56,13 +56,14 @@ def test_cli_reports_bad_input_on_one_line_with_exit_code_2():
 def test_fast_fit_takes_the_tight_line_resolution_for_waves_and_pre_release_moves():
     """configs/fidelity.yaml: the coarse branch of `fast` was validated on calm falls from a loop at rest only.
     gjoa-500 as bundled (50 m of slack, chord 6.5 deg) stays coarse; waves or a scripted vessel move before the
-    release switch to tight_line."""
+    release switch to tight_line (in waves with its in_waves keys: a 1 m loop chain)."""
     from moor_env.config import fidelity_presets
 
     coarse = fidelity_presets()["fast"]["loop_chain_segment_m"]
     tight = fidelity_presets()["fast"]["tight_line"]["loop_chain_segment_m"]
+    in_waves = fidelity_presets()["fast"]["tight_line"]["in_waves"]["loop_chain_segment_m"]
     loop = {name: load_scene("gjoa-500", {"fidelity": "fast", **ov}).discretization.loop_chain_segment_m
             for name, ov in {"calm": {}, "waves": {"sea_state_hs_m": 0.5},
                              "moves": {"release_time_s": 10.0, "installation.spacing_rate_m_s": 0.1},
                              "waits": {"release_time_s": 10.0}}.items()}
-    assert loop == {"calm": coarse, "waves": tight, "moves": tight, "waits": coarse}
+    assert loop == {"calm": coarse, "waves": in_waves, "moves": tight, "waits": coarse}

@@ -143,8 +143,10 @@ class SceneFactory:
         self.base = apply_scene_overrides(raw, {**cfg.fidelity, **cfg.scene_overrides})
         self.tight_line_rule = tight_line_rule(self.base.get("fidelity", "default"))
         explicit = self.base.get("discretization", {})
-        tight_line = None if self.tight_line_rule is None else {
-            k: v for k, v in tight_line_keys(self.tight_line_rule).items() if k not in explicit} or None
+        # the rule's keys in calm water and in waves (its in_waves entry), less those the config sets explicitly
+        tight_line = None if self.tight_line_rule is None else tuple(
+            {k: v for k, v in tight_line_keys(self.tight_line_rule, hs_m).items() if k not in explicit} or None
+            for hs_m in (0.0, math.inf))
         self.tight_line = None  # the representative scene below supplies the geometry the rule needs
         scene = self.scene(representative_scenario(cfg))
         self.anchor_length_m = scene.anchor.length_m
@@ -183,10 +185,17 @@ class SceneFactory:
                                        spacing_m=spacing_m, line_length_m=line_length_m)
         return tight_line_needed(self.tight_line_rule, *geometry, hs_m, line_speed_m_s)
 
+    def _tight_line_keys(self, hs_m: float) -> dict[str, Any] | None:
+        """The preset's ``tight_line`` keys for a sea of significant wave height ``hs_m`` [m] (its ``in_waves``
+        keys in waves), None where there are none to set."""
+        waves = hs_m > self.tight_line_rule["waves_above_hs_m"]
+        keys = self.tight_line[1 if waves else 0]
+        return None if keys is None else dict(keys)
+
     def pre_release_resolution(self, scenario: dict[str, Any]) -> dict[str, Any]:
-        """Discretization keys of a scenario before its release: the preset's ``tight_line`` keys where its
-        starting geometry or its waves need them (:func:`moor_env.config.tight_line_needed`), else none (the
-        preset's own resolution).
+        """Discretization keys of a scenario before its release: the preset's ``tight_line`` keys (in waves with
+        its ``in_waves`` keys) where its starting geometry or its waves need them
+        (:func:`moor_env.config.tight_line_needed`), else none (the preset's own resolution).
 
         Why: a calm, slack loop held until the release falls on the coarse resolution within 0.03 m/s of the
         fine one, at about 30 % of the cost; the coarse pre-release phase of a loop that is tight from the start,
@@ -196,11 +205,12 @@ class SceneFactory:
         if self.tight_line is None:
             return {}
         depth = float(scenario["water_depth_m"])
+        hs_m = float(scenario["sea_state_hs_m"])
         tight = self._tight_line_needed(depth, float(scenario["vertical_chain_length_m"]),
                                         float(scenario["vessel_spacing_over_depth"]) * depth,
                                         float(scenario["mooring_line_length_over_depth"]) * depth,
-                                        float(scenario["sea_state_hs_m"]), 0.0)  # the equilibrium is at rest
-        return dict(self.tight_line) if tight else {}
+                                        hs_m, 0.0)  # the equilibrium is at rest
+        return (self._tight_line_keys(hs_m) or {}) if tight else {}
 
     def fall_resolution(self, scene: SceneConfig, spacing_m: float, line_length_m: float,
                         line_speed_m_s: float) -> dict[str, Any] | None:
@@ -215,9 +225,10 @@ class SceneFactory:
         if self.tight_line is None:
             return None
         inst = scene.installation
+        hs_m = scene.environment.sea_state.hs_m
         tight = self._tight_line_needed(scene.environment.water_depth_m, inst.vertical_chain_length_m, spacing_m,
-                                        line_length_m, scene.environment.sea_state.hs_m, line_speed_m_s)
-        return dict(self.tight_line) if tight else None
+                                        line_length_m, hs_m, line_speed_m_s)
+        return self._tight_line_keys(hs_m) if tight else None
 
     def scene_data(self, scenario: dict[str, Any]) -> dict[str, Any]:
         """Scene mapping of a scenario."""

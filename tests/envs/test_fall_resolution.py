@@ -24,13 +24,14 @@ from moor_env.physics.stability import stable_time_step
 SCENE = {"water_depth_m": 500.0, "vessel_spacing_over_depth": 0.1, "mooring_line_length_over_depth": 1.08,
          "current_scale": 0.0, "sea_state_hs_m": 0.0}
 FAST = fidelity_presets()["fast"]
+WAVES_LOOP_M = FAST["tight_line"]["in_waves"]["loop_chain_segment_m"]  # tight_line's loop in waves
 
 
 def _episode(env, options, action):
     env.reset(seed=0, options=options)
     core = env.unwrapped.core
     calm = options["sea_state_hs_m"] == 0.0
-    expected = FAST["loop_chain_segment_m"] if calm else FAST["tight_line"]["loop_chain_segment_m"]
+    expected = FAST["loop_chain_segment_m"] if calm else WAVES_LOOP_M
     assert core.sim.model.scene.discretization.loop_chain_segment_m == expected
     for _ in range(59):
         env.step(np.asarray(action, np.float32))
@@ -56,8 +57,12 @@ def test_a_loop_tightened_before_the_release_falls_on_the_tight_line_resolution(
 
 
 def test_waves_run_the_tight_line_resolution_from_the_start(env):
+    """In waves with the tight_line rule's in_waves keys: a 1 m loop chain (configs/fidelity.yaml)."""
     info, loop_m = _episode(env, {**SCENE, "sea_state_hs_m": 0.5}, [0.0, 0.0, -1.0])
-    assert info["fall_resolution"] == "tight_line" and loop_m == FAST["tight_line"]["loop_chain_segment_m"]
+    assert info["fall_resolution"] == "tight_line" and loop_m == WAVES_LOOP_M
+    assert WAVES_LOOP_M != FAST["tight_line"]["loop_chain_segment_m"]
+    vertical_m = env.unwrapped.core.sim.model.scene.discretization.vertical_chain_segment_m
+    assert vertical_m == FAST["tight_line"]["vertical_chain_segment_m"]  # the keys in_waves leaves alone
 
 
 def test_pre_release_resolution_follows_the_sea_state_and_the_starting_geometry():
@@ -65,11 +70,12 @@ def test_pre_release_resolution_follows_the_sea_state_and_the_starting_geometry(
     factory = SceneFactory(cfg)
     scenario = {**representative_scenario(cfg), **SCENE}
     assert factory.pre_release_resolution(scenario) == {}
-    tight = factory.pre_release_resolution({**scenario, "sea_state_hs_m": 0.2})
-    assert tight["loop_chain_segment_m"] == FAST["tight_line"]["loop_chain_segment_m"]
-    # calm, but tight from the start (spacing 0.3 h): fine from the start too
-    assert factory.pre_release_resolution({**scenario, "vessel_spacing_over_depth": 0.3}) == tight
-    assert factory.scene({**scenario, "sea_state_hs_m": 0.2}).discretization.loop_chain_segment_m == 0.5
+    waves = factory.pre_release_resolution({**scenario, "sea_state_hs_m": 0.2})
+    assert waves["loop_chain_segment_m"] == WAVES_LOOP_M
+    # calm, but tight from the start (spacing 0.3 h): fine from the start too, with the calm tight_line keys
+    tight = factory.pre_release_resolution({**scenario, "vessel_spacing_over_depth": 0.3})
+    assert tight == {**waves, "loop_chain_segment_m": FAST["tight_line"]["loop_chain_segment_m"]}
+    assert factory.scene({**scenario, "sea_state_hs_m": 0.2}).discretization.loop_chain_segment_m == WAVES_LOOP_M
 
 
 def test_fall_resolution_thresholds_and_explicit_keys():
