@@ -9,7 +9,7 @@ depth 500 m, spacing 0.1 h, line 1.08 h, no current) with the sea state drawn fr
 most resets simulate the 20 s wave warm-up). The policy holds the vessels for 59 steps and releases on the 60th,
 so one episode is 59 s of pre-release control plus the fall to touchdown (the issue's "60 s pre-release plus the
 fall"), after the reset's warm-up. The equilibrium is solved before timing starts (it is cached). With waves the
-fall runs on the `fast` preset's tight_line resolution (fitted at the release, ``moor_env.remesh``). A second
+env runs the `fast` preset's tight_line resolution with its ``in_waves`` keys (1 m loop chain) throughout. A second
 variant (``calm default scene``) keeps the bundled gjoa-500 scene as it is, without waves (Hs 0, no warm-up): its
 slack loop hangs and falls on the coarse resolution. A third runs the pre-release phase at the scene's own step
 (``control.pre_release_dt_s`` and ``pre_release_dt_calm_s`` null) for comparison.

@@ -88,7 +88,8 @@ def run_episode(env, seed: int) -> dict:
             break
     td = info.get("touchdown", {})
     return {"seed": seed, "status": info["sim_status"], "cpu_s": time.process_time() - cpu0,
-            "speed_m_s": td.get("speed_m_s"), "tilt_deg": td.get("tilt_deg"), "release": release,
+            "speed_m_s": td.get("speed_m_s"), "tilt_deg": td.get("tilt_deg"),
+            "chain_past_back_end_m": td.get("chain_past_back_end_m"), "release": release,
             "scene_dt_s": core.sim.dt, "fallbacks": core.fallbacks, "scenario": core.scenario,
             "fall_resolution": info.get("fall_resolution")}
 

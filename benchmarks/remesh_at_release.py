@@ -7,10 +7,10 @@ A calm scenario whose loop starts slack runs the pre-release phase on the env's 
 resolution (``fast``: 2 m chain, 20 m fibre, 30 m wire) and, at the release, moves the state onto the preset's
 ``tight_line`` resolution (1 m vertical / 0.5 m loop chain, 50 m fibre, 100 m wire) where the geometry or the
 line's motion of that moment needs it; in waves, or with a loop tight from the start, tight_line runs
-throughout (in waves with its ``in_waves`` keys: a 1 m loop chain). Episodes draw their scenario from the default config (seeds 2000, 2001, ...; the calm part with
-``sea_state_hs_m`` 0) and are driven by seeded random controls (the policy of
-``benchmarks/pre_release_step.py``: spacing and winch rates redrawn every 10 s, release at a random step
-25-55). Cases, each part against its own reference:
+throughout (in waves with its ``in_waves`` keys: a 1 m loop chain). Episodes draw their scenario from the
+default config (seeds 2000, 2001, ...; the calm part with ``sea_state_hs_m`` 0) and are driven by seeded random
+controls (the policy of ``benchmarks/pre_release_step.py``: spacing and winch rates redrawn every 10 s, release at
+a random step 25-55). Cases, each part against its own reference:
 
 * calm, ``fine throughout`` (the reference): tight_line from the equilibrium on;
 * calm, ``default``: what the env does;

@@ -68,6 +68,7 @@ from moor_env.config import (  # noqa: E402
     fidelity_presets,
     mooring_line_slack,
     scene_from_dict,
+    tight_line_keys,
 )
 from moor_env.errors import ConfigError, SimulationDiverged  # noqa: E402
 from moor_env.physics import layout as LY  # noqa: E402
@@ -238,7 +239,7 @@ def preset_branches(name: str) -> dict[str, dict[str, Any]]:
     if tight is None:
         return {}
     slack = {f"discretization.{k}": v for k, v in preset.items()}
-    tight = {f"discretization.{k}": v for k, v in tight.items() if k not in ("slack_below_m", "chord_angle_above_deg")}
+    tight = {f"discretization.{k}": v for k, v in tight_line_keys(tight).items()}  # calm-water keys
     return {"slack-line": slack, "tight-line": {**slack, **tight}}
 
 

@@ -76,7 +76,8 @@ class AnchorReleaseEnv(gym.Env):
     with a slack loop runs on the fidelity preset's own resolution (``fast``: 2 m chain) and, at the release, moves
     onto its ``tight_line`` resolution if the loop, at the spacing and line length of that moment, will be tight
     at touchdown (``moor_env.remesh``); in waves, or with a loop tight from the start, ``tight_line`` runs
-    throughout (``benchmarks/remesh_at_release.py``).
+    throughout (``benchmarks/remesh_at_release.py``), in waves with its ``in_waves`` keys (a 1 m loop chain,
+    ``benchmarks/fall_reference.py``).
 
     ## Action Space
 
