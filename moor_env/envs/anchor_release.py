@@ -218,7 +218,9 @@ class AnchorReleaseEnv(gym.Env):
     * v0: initial version (issue 3): 3 actions, 27 observations, 11 reward terms. Since 2026-11-22 the fall's
       resolution is fitted at the release rather than to the geometry the controls could reach (episodes on the
       same seed differ from earlier ones by the resolution change). Since 2026-11-22 (later) ``info["touchdown"]``
-      also holds ``chain_past_back_end_m``.
+      also holds ``chain_past_back_end_m``, and in waves the scenes run the ``fast`` preset's tight_line resolution
+      with its ``in_waves`` keys (1 m loop chain at 11.25 ms instead of 0.5 m at 5.6 ms): waves episodes on the
+      same seed differ from earlier ones.
     """
 
     metadata = {"render_modes": ["human", "rgb_array", "rgb_array_list"], "render_fps": 4}
