@@ -17,9 +17,11 @@ Command line::
     python -m agents.evaluate runs/plan-sac crew random optimiser [--scenarios FILE] [--n-scenarios 24]
 
 A result (``evaluate_policy``) is a dict: ``policy``, ``env_id``, ``episodes`` (one record per scenario:
-``touchdown_speed_m_s``, ``tilt_deg``, ``reward``, ``success``, ``limits_exceeded``, ``sim_status`` ...) and
-``summary`` (:func:`summarize`). Several results of one policy trained with different seeds combine with
-:func:`combine_seeds` (t-interval over the seeds' means).
+``touchdown_speed_m_s``, ``tilt_deg``, ``reward``, ``success``, ``limits_exceeded``, ``sim_status``,
+``chain_past_back_end_m`` ...) and ``summary`` (:func:`summarize`; ``chain_inside``: touchdowns whose vertical
+chain had fallen past the anchor's back end, which the model has no contact to stop, so that their speed and tilt
+rest on an unmodelled part of the fall: README "Accuracy of the fall"). Several results of one policy trained with
+different seeds combine with :func:`combine_seeds` (t-interval over the seeds' means).
 
 **Success** (:func:`success_of`): touchdown with tilt below ``SUCCESS_TILT_DEG`` (2 deg, the Gjoa result; the DPA
 criterion is 5 deg) and speed at or above the env config's ``reward.required_speed_m_s`` (24 m/s), and no limit
@@ -97,6 +99,7 @@ def run_episode(env: gym.Env, policy: Policy, scenario: dict[str, Any], env_id: 
         "touchdown_speed_m_s": float(td["speed_m_s"]) if td else math.nan,
         "tilt_deg": float(td["tilt_deg"]) if td else math.nan,
         "offset_m": float(td["offset_m"]) if td else math.nan,
+        "chain_past_back_end_m": float(td["chain_past_back_end_m"]) if td else math.nan,
         "reward": total,
         "reward_terms": terms,
         "limits_exceeded": [k for k in LIMIT_TERMS if terms.get(k, 0.0) != 0.0],
@@ -117,7 +120,8 @@ def _release_time(info: dict[str, Any]) -> float:
 
 def _no_touchdown(status: str) -> dict[str, Any]:
     return {"sim_status": status, "touchdown": False, "touchdown_speed_m_s": math.nan, "tilt_deg": math.nan,
-            "offset_m": math.nan, "reward": math.nan, "reward_terms": {}, "limits_exceeded": [],
+            "offset_m": math.nan, "chain_past_back_end_m": math.nan, "reward": math.nan, "reward_terms": {},
+            "limits_exceeded": [],
             "success": False, "steps": 0, "release_s": math.nan}
 
 
@@ -236,6 +240,8 @@ def summarize(episodes: list[dict[str, Any]]) -> dict[str, Any]:
         "tilt_deg": _stats(col["tilt_deg"]),
         "reward": {**_stats(col["reward"]), "ci": bootstrap_ci(col["reward"])},
         "limits_exceeded": limits,
+        # records from before the key existed count as not inside
+        "chain_inside": int(sum(e.get("chain_past_back_end_m", math.nan) > 0.0 for e in episodes)),
     }
 
 
@@ -262,9 +268,11 @@ def _fmt_ci(ci: tuple[float, float], digits: int) -> str:
 
 
 def markdown_table(results: list[dict[str, Any]]) -> str:
-    """One row per result: success rate with its 95 % interval, speed, tilt, reward, limits, cost."""
+    """One row per result: success rate with its 95 % interval, speed, tilt, reward, limits, touchdowns whose chain
+    fell into the anchor (:func:`summarize`), cost."""
     head = ("| policy | env | episodes (seeds) | success [95 % CI] | speed m/s mean ± sd | tilt deg mean ± sd (p90) "
-            "| reward mean [95 % CI] | limits exceeded | wall s |\n|---|---|---|---|---|---|---|---|---|")
+            "| reward mean [95 % CI] | limits exceeded | chain inside | wall s |\n"
+            "|---|---|---|---|---|---|---|---|---|---|")
     rows = [head]
     for r in results:
         s = r["summary"]
@@ -274,7 +282,8 @@ def markdown_table(results: list[dict[str, Any]]) -> str:
             f"| {100 * s['success_rate']:.0f} % {_fmt_ci(tuple(100 * x for x in s['success_ci']), 0)} "
             f"| {s['speed_m_s']['mean']:.2f} ± {s['speed_m_s']['std']:.2f} "
             f"| {s['tilt_deg']['mean']:.2f} ± {s['tilt_deg']['std']:.2f} ({s['tilt_deg']['p90']:.2f}) "
-            f"| {s['reward']['mean']:.3f} {_fmt_ci(s['reward']['ci'], 3)} | {limits} | {r['wall_s']:.0f} |")
+            f"| {s['reward']['mean']:.3f} {_fmt_ci(s['reward']['ci'], 3)} | {limits} | {s.get('chain_inside', 0)} "
+            f"| {r['wall_s']:.0f} |")
     return "\n".join(rows) + "\n"
 
 

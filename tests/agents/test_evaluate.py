@@ -55,6 +55,9 @@ def test_results_json_table_and_plots(tmp_path, tiny_cfg, tiny_scenarios):
     assert [e["scenario"] for e in crew["episodes"]] == [s["id"] for s in tiny_scenarios]
     e = crew["episodes"][0]
     assert e["touchdown"] and e["touchdown_speed_m_s"] > 5.0 and e["steps"] == 1
+    inside = sum(x["chain_past_back_end_m"] > 0.0 for x in crew["episodes"])  # from the env's touchdown info
+    assert all(math.isfinite(x["chain_past_back_end_m"]) for x in crew["episodes"])
+    assert crew["summary"]["chain_inside"] == inside
     assert e["reward"] == pytest.approx(sum(e["reward_terms"].values()))
     paths = write_report([crew, both], tmp_path, tiny_scenarios)
     data = json.loads(paths["json"].read_text())
