@@ -272,6 +272,11 @@ class Simulator:
         w = b[L.BS_OMEGA: L.BS_OMEGA + 3]
         return b[L.BS_POS: L.BS_POS + 3] + s * e, b[L.BS_VEL: L.BS_VEL + 3] + s * np.cross(w, e)
 
+    def back_end_m(self) -> np.ndarray:
+        """Centre of the anchor's back end (the tip minus its length along the axis) [m]."""
+        axis = self.state.body_state[L.BS_AXIS:L.BS_AXIS + 3]
+        return self.tip_state()[0] - self.model.body_f[L.BF_LENGTH] * axis
+
     def tilt_deg(self) -> float:
         """Angle of the anchor axis from vertical (tip down) [deg]."""
         ez = self.state.body_state[L.BS_AXIS + 2]
@@ -287,12 +292,12 @@ class Simulator:
         instead of piling onto it; where this happens, the touchdown rests on a part of the fall the model does not
         represent (README, "Accuracy of the fall").
         """
-        st, m = self.state, self.model
-        idx = m.lines[line].index
+        st = self.state
+        idx = self.model.lines[line].index
         first = st.line_i[idx, L.LI_SEG_START]
         nodes = st.seg_i[first:first + st.line_i[idx, L.LI_NSEG], L.SI_B]
         axis = st.body_state[L.BS_AXIS:L.BS_AXIS + 3]
-        rel = st.node_pos[nodes] - (self.tip_state()[0] - m.body_f[L.BF_LENGTH] * axis)
+        rel = st.node_pos[nodes] - self.back_end_m()
         along = rel @ axis
         k = int(np.argmax(along))
         return float(along[k]), float(np.linalg.norm(rel[k] - along[k] * axis))
@@ -601,7 +606,6 @@ def _snapshot(sim: Simulator) -> dict[str, Any]:
         segs = range(li[L.LI_SEG_START], li[L.LI_SEG_START] + li[L.LI_NSEG])
         nodes = [st.seg_i[segs[0], L.SI_A]] + [st.seg_i[s, L.SI_B] for s in segs]
         lines[name] = st.node_pos[nodes].copy()
-    tip, _ = sim.tip_state() if sim.model.body_active else (None, None)
-    axis = st.body_state[L.BS_AXIS:L.BS_AXIS + 3].copy()
-    back = None if tip is None else tip - sim.model.body_f[L.BF_LENGTH] * axis
-    return {"t": st.t, "lines": lines, "tip": tip, "back": back}
+    active = sim.model.body_active
+    return {"t": st.t, "lines": lines, "tip": sim.tip_state()[0] if active else None,
+            "back": sim.back_end_m() if active else None}

@@ -863,7 +863,6 @@ class InstallationCore:
             mats = [m.material_names[k] for k in st.seg_i[segs, L.SI_MAT]]
             lines[name] = (st.node_pos[nodes].copy(), mats)
         tip, vel = sim.tip_state()
-        axis = st.body_state[L.BS_AXIS:L.BS_AXIS + 3].copy()
         vessels = []
         for v in range(sim.vessel_mean_m.shape[0]):
             x, y, z, *_ = track_state(sim.tracks, v, st.t, sim.env_f)
@@ -872,7 +871,7 @@ class InstallationCore:
         depths = np.linspace(0.0, self.depth * 0.95, 6)
         current = [(-d, *current_velocity(-d, sim.env_f, profile)[:2]) for d in depths]
         return {"t_s": self.time_s, "depth_m": self.depth, "lines": lines, "tip": tip.copy(),
-                "back": tip - m.body_f[L.BF_LENGTH] * axis, "tip_speed_m_s": float(np.linalg.norm(vel)),
+                "back": sim.back_end_m(), "tip_speed_m_s": float(np.linalg.norm(vel)),
                 "tilt_deg": sim.tilt_deg(), "vessels": vessels, "current": current, "released": self.released,
                 "status": self.status, "chain_material": self.chain_material,
                 "fibre_material": m.material_names[self.fibre_mat], "hs_m": self.hs, "target_xy": self.target_xy}
