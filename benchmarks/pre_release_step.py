@@ -54,7 +54,6 @@ class ReferenceVariants:
 
     def pre_release(self, t_end_s: float, phase: str) -> envcore.Advance:
         sim = self.core.sim
-        self.core.saved_state = None
         return envcore.Advance(t_end_s, False, phase, envcore._even_step(t_end_s - sim.state.t,
                                                                           self.step_factor * sim.dt))
 

@@ -32,7 +32,7 @@ from moor_env.physics.integrate import (
 )
 from moor_env.physics.line import top_tensions
 from moor_env.physics.statics import change_line_length, solve_equilibrium
-from moor_env.physics.vessels import jonswap_components, sample_tracks
+from moor_env.physics.vessels import fill_tracks, jonswap_components, track_samples, wave_track_coefficients
 
 HISTORY_CAPACITY = 20000
 
@@ -64,20 +64,9 @@ class SimState:
                         self.node_f.copy(), self.seg_i.copy(), self.seg_f.copy(), self.line_i.copy(),
                         self.line_f.copy(), self.t, self.released)
 
-    def copy_into(self, target: SimState | None) -> SimState:
-        """This state's values written into ``target``'s arrays when their shapes match (no allocation: a
-        backup taken every control step), else a new :meth:`copy`; returns the copy."""
-        if target is None or target is self or target.node_pos.shape != self.node_pos.shape \
-                or target.seg_i.shape != self.seg_i.shape or target.line_i.shape != self.line_i.shape:
-            return self.copy()
-        for name in _ARRAY_FIELDS:
-            np.copyto(getattr(target, name), getattr(self, name))
-        target.t = self.t
-        target.released = self.released
-        return target
 
-
-_ARRAY_FIELDS = ("node_pos", "node_vel", "body_state", "node_i", "node_f", "seg_i", "seg_f", "line_i", "line_f")
+# the array fields of SimState, in order
+STATE_ARRAY_FIELDS = ("node_pos", "node_vel", "body_state", "node_i", "node_f", "seg_i", "seg_f", "line_i", "line_f")
 
 
 class Workspace:
@@ -125,6 +114,7 @@ class Simulator:
         self.vessel_mean_m = model.vessel_base_m.copy()
         self.tracks = np.zeros((1, 2, 6))
         self.sea = _sea_components(model.scene)
+        self._wave_coefficients = wave_track_coefficients(self.sea, self.env_f[L.EF_G])
         self.set_vessel_motion(0.0, 1.0, np.zeros(self.vessel_mean_m.shape[0]))
         self.release_point_m: np.ndarray | None = None
         self.release_time_s: float | None = None
@@ -144,8 +134,10 @@ class Simulator:
         speeds = np.asarray(horizontal_speed_m_s, float).reshape(nv)
         waves = self.sea is not None
         sample_dt = min(0.05, duration_s) if waves else max(duration_s, 1e-3)
-        tracks = sample_tracks(self.vessel_mean_m, speeds, t0_s, duration_s, sample_dt, self.sea,
-                               self.env_f[L.EF_G])
+        shape = (nv, track_samples(duration_s, sample_dt), 6)
+        # the same window length (every control step) is written in place: the kernels' array stays put
+        tracks = self.tracks if self.tracks.shape == shape else np.empty(shape)
+        fill_tracks(tracks, t0_s, sample_dt, self.vessel_mean_m, speeds, *self._wave_coefficients)
         if waves and ramp_s is None:
             ramp_s = self.sea["ramp_s"]
         if waves and ramp_s and t0_s < ramp_s:  # past the ramp the factor is 1
@@ -157,10 +149,7 @@ class Simulator:
             tracks[:, :, :3] = mean + smooth[None, :, None] * (tracks[:, :, :3] - mean)
             tracks[:, :, 3:] = speeds[:, None, None] * np.array([1.0, 0.0, 0.0]) + smooth[None, :, None] * (
                 tracks[:, :, 3:] - speeds[:, None, None] * np.array([1.0, 0.0, 0.0]))
-        if tracks.shape == self.tracks.shape:
-            self.tracks[...] = tracks  # same window length (every control step): the kernels' array stays put
-        else:
-            self.tracks = tracks
+        self.tracks = tracks
         self.env_f[L.EF_TRACK_T0] = t0_s
         self.env_f[L.EF_TRACK_DT] = sample_dt
         self.vessel_mean_m[:, 0] += speeds * duration_s
@@ -219,6 +208,11 @@ class Simulator:
     def _loads_current(self) -> bool:
         key = self._loads_of
         return key is not None and key[0] is self.state and key[1] == self.state.t
+
+    def loads_record(self) -> tuple[SimState, float] | None:
+        """The record of :meth:`note_loads_evaluated` while it is of the current state (None otherwise): an object
+        that callers may keep to tell later whether the state is still the one the kernel left."""
+        return self._loads_of if self._loads_current() else None
 
     def component_name(self, fail_kind: int, index: int) -> str:
         """Human name of a failing component reported by the kernel."""

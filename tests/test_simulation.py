@@ -117,22 +117,6 @@ def test_vessel_tracks_follow_the_wave_components():
             assert np.max(np.abs(tracks[v, :, column] - values)) < 1e-9, (v, column)
 
 
-def test_state_copy_into_reuses_matching_arrays_and_copies_otherwise():
-    sim = solve_statics(load_scene("vertical-chain")).simulator
-    state = sim.state
-    backup = state.copy_into(None)
-    assert backup is not state and np.array_equal(backup.node_pos, state.node_pos)
-    state.node_pos[:, 2] -= 1.0
-    state.t = 3.5
-    arrays = backup.node_pos
-    assert state.copy_into(backup) is backup and backup.node_pos is arrays  # no allocation
-    assert np.array_equal(backup.node_pos, state.node_pos) and backup.t == 3.5
-    other = solve_statics(load_scene("gjoa-500")).simulator.state
-    fresh = other.copy_into(backup)  # other node count: a new copy, the target untouched
-    assert fresh is not backup and np.array_equal(fresh.node_pos, other.node_pos)
-    assert np.array_equal(backup.node_pos, state.node_pos)
-
-
 def test_line_past_back_end_measures_along_and_off_the_anchor_axis():
     """Geometry of ``Simulator.line_past_back_end_m`` (reference: a node placed by hand, exact to 1e-9 m)."""
     sim = solve_statics(load_scene("vertical-chain")).simulator

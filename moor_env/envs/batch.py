@@ -17,7 +17,11 @@ replaced; ``set_vessel_motion`` may replace the vessel tracks, whose row is refr
 
 After each scene's advance the kernel evaluates the loads and the lines' top tensions at the state reached
 (unless it blew up), so the observation's tensions (``Simulator.top_tensions_n``) need no second kernel call and
-that work runs on the batch's threads.
+that work runs on the batch's threads. An env slot also passes :class:`SlotBuffers`: the kernel then writes the
+quantities its observation reads (``M_*``, :func:`measure_scene`) and, where the advance asks for it, first copies
+the state into a backup (the env repeats a diverged coarse pre-release advance from it). Both had been Python on
+every env step (a numpy copy of nine arrays, a dozen small kernel and numpy calls), together about a fifth of the
+batched env's per-slot Python.
 
 Why the single env goes through this kernel too (with one scene): LLVM optimises ``advance`` together with its
 caller (inlining, constant arguments), and with the kernels' fastmath ``contract`` flag the fused multiply-adds
@@ -37,6 +41,7 @@ follows (``_ARRAY_ARGS``, ``_sources`` and the views in :func:`advance_many`).
 
 from __future__ import annotations
 
+import math
 import time
 import weakref
 from concurrent.futures import ThreadPoolExecutor
@@ -50,7 +55,9 @@ from moor_env.errors import SimulationDiverged
 from moor_env.physics import layout as L
 from moor_env.physics.integrate import advance, compute_accelerations
 from moor_env.physics.line import top_tensions
-from moor_env.simulation import Simulator
+from moor_env.physics.environment import current_velocity
+from moor_env.physics.vessels import track_state
+from moor_env.simulation import STATE_ARRAY_FIELDS, SimState, Simulator
 
 # (name, dtype, ndim) of every per-scene array argument of ``advance``, in call order
 _ARRAY_ARGS: tuple[tuple[str, type, int], ...] = (
@@ -64,13 +71,40 @@ _ARRAY_ARGS: tuple[tuple[str, type, int], ...] = (
     ("pos0", np.float64, 2), ("vel0", np.float64, 2), ("body0", np.float64, 1), ("touchdown", np.float64, 1),
     ("hist", np.float64, 2), ("hist_count", np.int64, 1),
 )
-# after them, the per-scene arrays the kernel writes its outputs into
-_OUTPUT_ARGS: tuple[tuple[str, type, int], ...] = (("top_tension", np.float64, 1),)
+# after them, the per-scene arrays the kernel writes its outputs into, what it reads to measure, and the backup
+# of the state (the arrays of ``SimState``, in its field order)
+_OUTPUT_ARGS: tuple[tuple[str, type, int], ...] = (
+    ("top_tension", np.float64, 1), ("measures", np.float64, 1), ("measure_spec", np.int64, 1),
+    ("backup_node_pos", np.float64, 2), ("backup_node_vel", np.float64, 2), ("backup_body_state", np.float64, 1),
+    ("backup_node_i", np.int64, 2), ("backup_node_f", np.float64, 2), ("backup_seg_i", np.int64, 2),
+    ("backup_seg_f", np.float64, 2), ("backup_line_i", np.int64, 2), ("backup_line_f", np.float64, 2),
+)
 _TABLE_ARGS = _ARRAY_ARGS + _OUTPUT_ARGS
 _TRACKS = [name for name, _, _ in _ARRAY_ARGS].index("tracks")
 # columns of a scene's per-call scalars (float64 table) and results (int64 / float64 tables)
-IN_T, IN_T_END, IN_DT, IN_INTEGRATOR, IN_BODY_ACTIVE, IN_DETECT = range(6)
+IN_T, IN_T_END, IN_DT, IN_INTEGRATOR, IN_BODY_ACTIVE, IN_DETECT, IN_BACKUP = range(7)
+N_IN = 7
 OUT_STATUS, OUT_STEPS, OUT_FAIL_KIND, OUT_FAIL_INDEX = range(4)
+
+# what the kernel measures after an advance for an env slot's observation (``SlotBuffers.measures``)
+M_TILT_DEG = 0  # anchor axis from vertical, tip down [deg]
+M_AXIS_RATE_DEG_S = 1  # angular speed of the axis (spin about it left out) [deg/s]
+M_HEAVE_M = 2  # installation vessel z [m]
+M_HEAVE_RATE_M_S = 3
+M_CURRENT_X_M_S = 4  # surface current
+M_CURRENT_Y_M_S = 5
+M_TIP_Z_M = 6
+M_LOOP_Z_M = 7  # lowest node of the summarised line (inf if it has no active segment)
+M_FIBRE_Z_M = 8  # lowest node on its segments of the summarised material (inf if none)
+M_LINE_L0_M = 9  # unstretched length of its active segments
+M_RELEASE_POS = 10  # 3: release node position [m]
+M_RELEASE_VEL = 13  # 3 [m/s]
+M_WIRE_TENSION_N = 16  # top tension of the spec's wire line (0 if none)
+M_LINE_TENSION_N = 17  # top tension of the summarised line (0 if none)
+N_MEASURES = 18
+# measure_spec entries (-1: none)
+SPEC_RELEASE_NODE, SPEC_LINE, SPEC_MATERIAL, SPEC_WIRE, SPEC_VESSEL = range(5)
+N_SPEC = 5
 
 
 @intrinsic
@@ -111,13 +145,84 @@ def _i64_2d(row):
 
 
 @numba.njit(cache=True, nogil=True)
+def line_summary(node_pos, seg_i, seg_f, line_i, line, material):
+    """Over the active segments of ``line``: the lowest node z, the lowest z of nodes on segments of
+    ``material`` (inf if none) and the total unstretched length [m].
+
+    One pass in a kernel because the observation needs it every step (numpy masks over the segment table cost
+    more than the rest of the observation).
+    """
+    start = line_i[line, L.LI_SEG_START]
+    z_min = math.inf
+    z_mat = math.inf
+    length = 0.0
+    for s in range(start, start + line_i[line, L.LI_SEG_CAP]):
+        if seg_i[s, L.SI_ACTIVE] != 1 or seg_i[s, L.SI_LINE] != line:
+            continue
+        z = min(node_pos[seg_i[s, L.SI_A], 2], node_pos[seg_i[s, L.SI_B], 2])
+        z_min = min(z_min, z)
+        if seg_i[s, L.SI_MAT] == material:
+            z_mat = min(z_mat, z)
+        length += seg_f[s, L.SF_L0]
+    return z_min, z_mat, length
+
+
+@numba.njit(cache=True, nogil=True)
+def measure_scene(t, node_pos, node_vel, body_state, seg_i, seg_f, line_i, body_f, env_f, current_profile, tracks,
+                  top_tension, spec, out):
+    """The ``M_*`` quantities of a scene at time ``t`` [s] into ``out`` (the lines' top tensions ``top_tension``
+    [N] already evaluated at this state); ``spec`` names the release node, the line and material to summarise,
+    the wire line and the vessel whose heave is read (``SPEC_*``, -1: none)."""
+    ex = body_state[L.BS_AXIS]
+    ey = body_state[L.BS_AXIS + 1]
+    ez = body_state[L.BS_AXIS + 2]
+    wx = body_state[L.BS_OMEGA]
+    wy = body_state[L.BS_OMEGA + 1]
+    wz = body_state[L.BS_OMEGA + 2]
+    w_axial = wx * ex + wy * ey + wz * ez
+    out[M_TILT_DEG] = math.degrees(math.acos(min(1.0, max(-1.0, -ez))))
+    out[M_AXIS_RATE_DEG_S] = math.degrees(math.sqrt((wx - w_axial * ex) ** 2 + (wy - w_axial * ey) ** 2
+                                                    + (wz - w_axial * ez) ** 2))
+    out[M_HEAVE_M] = out[M_HEAVE_RATE_M_S] = 0.0
+    if spec[SPEC_VESSEL] >= 0:
+        _, _, hz, _, _, hvz = track_state(tracks, spec[SPEC_VESSEL], t, env_f)
+        out[M_HEAVE_M] = hz
+        out[M_HEAVE_RATE_M_S] = hvz
+    cx, cy, _ = current_velocity(0.0, env_f, current_profile)
+    out[M_CURRENT_X_M_S] = cx
+    out[M_CURRENT_Y_M_S] = cy
+    out[M_TIP_Z_M] = body_state[L.BS_POS + 2] + body_f[L.BF_S_TIP] * ez
+    out[M_LOOP_Z_M] = out[M_FIBRE_Z_M] = math.inf
+    out[M_LINE_L0_M] = out[M_LINE_TENSION_N] = 0.0
+    if spec[SPEC_LINE] >= 0:
+        loop_z, fibre_z, length = line_summary(node_pos, seg_i, seg_f, line_i, spec[SPEC_LINE], spec[SPEC_MATERIAL])
+        out[M_LOOP_Z_M] = loop_z
+        out[M_FIBRE_Z_M] = fibre_z
+        out[M_LINE_L0_M] = length
+        out[M_LINE_TENSION_N] = top_tension[spec[SPEC_LINE]]
+    out[M_WIRE_TENSION_N] = top_tension[spec[SPEC_WIRE]] if spec[SPEC_WIRE] >= 0 else 0.0
+    node = spec[SPEC_RELEASE_NODE]
+    for c in range(3):
+        out[M_RELEASE_POS + c] = node_pos[node, c] if node >= 0 else 0.0
+        out[M_RELEASE_VEL + c] = node_vel[node, c] if node >= 0 else 0.0
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _copy2(src, dst):
+    for r in range(src.shape[0]):
+        for c in range(src.shape[1]):
+            dst[r, c] = src[r, c]
+
+
+@numba.njit(cache=True, nogil=True)
 def advance_many(scalars, addresses, out_i, out_t):
     """``advance`` for every scene of the tables, then the loads at the state reached.
 
     Parameters
     ----------
-    scalars : float64[n, 6]
-        t, t_end, dt [s], integrator code, body active (0/1), detect touchdown (0/1) (``IN_*`` columns).
+    scalars : float64[n, N_IN]
+        t, t_end, dt [s], integrator code, body active (0/1), detect touchdown (0/1), back the state up first (0/1)
+        (``IN_*`` columns).
     addresses : int64[n, len(_TABLE_ARGS), 4]
         Data address and shape of each array argument of ``advance`` and of each output array
         (``_OUTPUT_ARGS``; see the module docstring).
@@ -136,7 +241,17 @@ def advance_many(scalars, addresses, out_i, out_t):
         node_contact, node_acc, seg_tension = _f64_1d(a[18]), _f64_2d(a[19]), _f64_1d(a[20])
         body_load, body_acc, pos0, vel0 = _f64_1d(a[21]), _f64_1d(a[22]), _f64_2d(a[23]), _f64_2d(a[24])
         body0, touchdown, hist, hist_count = _f64_1d(a[25]), _f64_1d(a[26]), _f64_2d(a[27]), _i64_1d(a[28])
-        top_tension = _f64_1d(a[29])
+        top_tension, measures, spec = _f64_1d(a[29]), _f64_1d(a[30]), _i64_1d(a[31])
+        if scalars[i, IN_BACKUP] != 0.0:
+            _copy2(node_pos, _f64_2d(a[32]))
+            _copy2(node_vel, _f64_2d(a[33]))
+            _f64_1d(a[34])[:] = body_state
+            _copy2(node_i, _i64_2d(a[35]))
+            _copy2(node_f, _f64_2d(a[36]))
+            _copy2(seg_i, _i64_2d(a[37]))
+            _copy2(seg_f, _f64_2d(a[38]))
+            _copy2(line_i, _i64_2d(a[39]))
+            _copy2(line_f, _f64_2d(a[40]))
         body_active = scalars[i, IN_BODY_ACTIVE] != 0.0
         status, t_reached, n_steps, fail_kind, fail_index = advance(
             scalars[i, IN_T], scalars[i, IN_T_END], scalars[i, IN_DT], np.int64(scalars[i, IN_INTEGRATOR]),
@@ -149,6 +264,9 @@ def advance_many(scalars, addresses, out_i, out_t):
                                   line_f, body_f, body_q, env_f, current_profile, node_force, node_mm, node_mass,
                                   node_contact, node_acc, seg_tension, body_load, body_acc)
             top_tensions(line_i, seg_i, node_i, node_force, seg_tension, top_tension)
+            if spec.shape[0] == N_SPEC:
+                measure_scene(t_reached, node_pos, node_vel, body_state, seg_i, seg_f, line_i, body_f, env_f,
+                              current_profile, tracks, top_tension, spec, measures)
         out_i[i, OUT_STATUS] = status
         out_i[i, OUT_STEPS] = n_steps
         out_i[i, OUT_FAIL_KIND] = fail_kind
@@ -156,10 +274,61 @@ def advance_many(scalars, addresses, out_i, out_t):
         out_t[i] = t_reached
 
 
-def _sources(sim: Simulator) -> dict[str, np.ndarray]:
-    """The simulator's arrays by ``advance``'s argument names."""
+class SlotBuffers:
+    """An env slot's arrays for the batch kernel besides its simulator's.
+
+    Parameters
+    ----------
+    spec : sequence of int
+        What :func:`measure_scene` measures (``SPEC_*`` order: release node, line and material to summarise, wire
+        line, vessel; -1 for none).
+    state : SimState, optional
+        A state of the simulation's shapes: the backup's buffers are made like it (needed for an advance with
+        ``take_backup``).
+
+    Attributes
+    ----------
+    measures : ndarray (N_MEASURES,)
+        The ``M_*`` quantities the kernel measured after the last advance that did not blow up.
+    record :
+        The simulator's loads record (``Simulator.loads_record``) the measures belong to: they are current while it
+        still is.
+    backup : SimState or None
+        The state before the last advance that took a backup (its ``t`` and ``released`` set by the caller).
+    """
+
+    __slots__ = ("spec", "measures", "record", "backup")
+
+    def __init__(self, spec, state: SimState | None = None) -> None:
+        self.spec = np.array(spec, dtype=np.int64).reshape(N_SPEC)
+        self.measures = np.full(N_MEASURES, np.nan)
+        self.record = None
+        self.backup = None if state is None else state.copy()
+
+    def current_measures(self, sim: Simulator) -> np.ndarray | None:
+        """The measures if they are of ``sim``'s current state (nothing changed it since the kernel measured)."""
+        record = self.record
+        return self.measures if record is not None and sim.loads_record() is record else None
+
+
+_NO_SPEC = np.zeros(0, dtype=np.int64)  # a job without SlotBuffers: the kernel measures nothing
+_NO_MEASURES = np.zeros(0)
+
+
+def _sources(sim: Simulator, buffers: SlotBuffers | None) -> dict[str, np.ndarray]:
+    """The simulator's (and the slot's) arrays by the kernel's argument names; without a backup, the state's own
+    arrays stand in for the backup's (the kernel writes them only for an advance that takes a backup)."""
     st, m, w = sim.state, sim.model, sim.work
+    backup = st if buffers is None or buffers.backup is None else buffers.backup
+    if backup is not st:
+        for name in STATE_ARRAY_FIELDS:
+            if getattr(backup, name).shape != getattr(st, name).shape:
+                raise TypeError(f"backup array '{name}' is {getattr(backup, name).shape}, the state's "
+                                f"{getattr(st, name).shape}")
     return {
+        "measures": _NO_MEASURES if buffers is None else buffers.measures,
+        "measure_spec": _NO_SPEC if buffers is None else buffers.spec,
+        **{f"backup_{name}": getattr(backup, name) for name in STATE_ARRAY_FIELDS},
         "node_pos": st.node_pos, "node_vel": st.node_vel, "body_state": st.body_state, "node_i": st.node_i,
         "node_f": st.node_f, "seg_i": st.seg_i, "seg_f": st.seg_f, "mat_f": m.mat_f, "line_i": st.line_i,
         "line_f": st.line_f, "body_f": m.body_f, "body_q": m.body_q, "env_f": sim.env_f,
@@ -180,13 +349,16 @@ def _address_row(name: str, arr: np.ndarray, dtype: type, ndim: int) -> list[int
 
 
 class _Entry:
-    """A simulator's address table for one state object, with the arrays it points into (kept alive)."""
+    """A simulator's address table for one state object (and slot buffers and backup), with the arrays it points
+    into (kept alive)."""
 
-    __slots__ = ("state", "arrays", "table")
+    __slots__ = ("state", "buffers", "backup", "arrays", "table")
 
-    def __init__(self, sim: Simulator) -> None:
-        sources = _sources(sim)
+    def __init__(self, sim: Simulator, buffers: SlotBuffers | None) -> None:
+        sources = _sources(sim, buffers)
         self.state = sim.state
+        self.buffers = buffers
+        self.backup = None if buffers is None else buffers.backup
         self.arrays = [sources[name] for name, _, _ in _TABLE_ARGS]
         self.table = np.array([_address_row(name, sources[name], dtype, ndim) for name, dtype, ndim in _TABLE_ARGS],
                               dtype=np.int64)
@@ -199,8 +371,13 @@ class _Entry:
             self.arrays[_TRACKS] = tracks
 
 
-def balanced_groups(items: list[tuple[int, tuple[Simulator, float, bool, float]]], n_groups: int
-                    ) -> list[list[tuple[int, tuple[Simulator, float, bool, float]]]]:
+def _job_parts(job: tuple) -> tuple[Simulator, float, bool, float, SlotBuffers | None, bool]:
+    """A job with its optional entries filled in: (simulator, t_end_s, detect, dt_s, buffers, take_backup)."""
+    sim, t_stop, detect, step_s, *rest = job
+    return sim, t_stop, detect, step_s, rest[0] if rest else None, bool(rest[1]) if len(rest) > 1 else False
+
+
+def balanced_groups(items: list[tuple[int, tuple]], n_groups: int) -> list[list[tuple[int, tuple]]]:
     """Split ``(slot, job)`` items into at most ``n_groups`` groups of about equal cost (longest first, each to the
     least loaded group).
 
@@ -213,7 +390,7 @@ def balanced_groups(items: list[tuple[int, tuple[Simulator, float, bool, float]]
     n = min(n_groups, len(items))
     if n <= 1:
         return [items] if items else []
-    costs = [(t_end - sim.state.t) / dt * sim.state.node_pos.shape[0] for _, (sim, t_end, _, dt) in items]
+    costs = [(job[1] - job[0].state.t) / job[3] * job[0].state.node_pos.shape[0] for _, job in items]
     groups: list[list] = [[] for _ in range(n)]
     loads = [0.0] * n
     for k in sorted(range(len(items)), key=lambda k: -costs[k]):
@@ -242,44 +419,47 @@ class BatchAdvancer:
         self._entries: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # simulator -> _Entry
         self.kernel_s = 0.0  # CPU time inside the kernel, summed over threads (benchmarks/bench_env.py)
 
-    def _entry(self, sim: Simulator) -> _Entry:
-        """``sim``'s address table, cached while its state is the same object (the entry holds it, so a new state
-        can never pass for an old one; the entry goes with the simulator)."""
+    def _entry(self, sim: Simulator, buffers: SlotBuffers | None) -> _Entry:
+        """``sim``'s address table, cached while its state, slot buffers and backup are the same objects (the entry
+        holds them, so a new one can never pass for an old one; the entry goes with the simulator)."""
         entry = self._entries.get(sim)
-        if entry is None or entry.state is not sim.state:
-            entry = _Entry(sim)
+        if entry is None or entry.state is not sim.state or entry.buffers is not buffers or (
+                buffers is not None and entry.backup is not buffers.backup):
+            entry = _Entry(sim, buffers)
             self._entries[sim] = entry
         entry.refresh_tracks(sim.tracks)
         return entry
 
-    def _call(self, jobs: list[tuple[Simulator, float, bool, float]]
-              ) -> tuple[np.ndarray, np.ndarray, float]:
+    def _call(self, jobs: list[tuple]) -> tuple[np.ndarray, np.ndarray, float]:
         """One kernel call on the scenes of ``jobs``; returns ``out_i``, ``out_t`` and the kernel's CPU time."""
         n = len(jobs)
-        scalars = np.empty((n, 6))
+        scalars = np.empty((n, N_IN))
         addresses = np.empty((n, len(_TABLE_ARGS), 4), dtype=np.int64)
         entries = []  # keeps every array referenced until the call returns
-        for i, (sim, t_stop, detect, step_s) in enumerate(jobs):
-            entry = self._entry(sim)
+        for i, job in enumerate(jobs):
+            sim, t_stop, detect, step_s, buffers, backup = _job_parts(job)
+            if backup and (buffers is None or buffers.backup is None):
+                raise ValueError("an advance that takes a backup needs SlotBuffers with a backup state")
+            entry = self._entry(sim, buffers)
             entries.append(entry)
             addresses[i] = entry.table
-            scalars[i] = (sim.state.t, t_stop, step_s, sim.integrator_code, sim.model.body_active, detect)
+            scalars[i] = (sim.state.t, t_stop, step_s, sim.integrator_code, sim.model.body_active, detect, backup)
         out_i = np.zeros((n, 4), dtype=np.int64)
         out_t = np.zeros(n)
         t0 = time.thread_time()
         advance_many(scalars, addresses, out_i, out_t)
         return out_i, out_t, time.thread_time() - t0
 
-    def _run_group(self, group: list[tuple[int, tuple[Simulator, float, bool, float]]]
-                   ) -> tuple[list[tuple[int, tuple]], float]:
+    def _run_group(self, group: list[tuple[int, tuple]]) -> tuple[list[tuple[int, tuple]], float]:
         out_i, out_t, seconds = self._call([job for _, job in group])
         results = [(slot, (int(out_i[j, OUT_STATUS]), float(out_t[j]), int(out_i[j, OUT_FAIL_KIND]),
                            int(out_i[j, OUT_FAIL_INDEX]))) for j, (slot, _) in enumerate(group)]
         return results, seconds
 
-    def run(self, jobs: dict[int, tuple[Simulator, float, bool, float]]
-            ) -> dict[int, tuple[int | None, SimulationDiverged | None]]:
-        """Advance ``{slot: (simulator, t_end_s, detect_touchdown, dt_s)}``.
+    def run(self, jobs: dict[int, tuple]) -> dict[int, tuple[int | None, SimulationDiverged | None]]:
+        """Advance ``{slot: (simulator, t_end_s, detect_touchdown, dt_s[, slot_buffers, take_backup])}``: with
+        :class:`SlotBuffers` the kernel also measures the state reached and, with ``take_backup``, first copies the
+        state into the buffers' backup.
 
         Returns
         -------
@@ -304,5 +484,8 @@ class BatchAdvancer:
                                                           L.STATUS_NAMES[status]))
             else:
                 sim.note_loads_evaluated()
+                buffers = _job_parts(jobs[slot])[4]
+                if buffers is not None:
+                    buffers.record = sim.loads_record()
                 results[slot] = (status, None)
         return results

@@ -36,12 +36,12 @@ from moor_env.config import (
     tight_line_needed,
     tight_line_rule,
 )
-from moor_env.envs.batch import BatchAdvancer
+from moor_env.envs import batch as B
+from moor_env.envs.batch import BatchAdvancer, SlotBuffers, line_summary, measure_scene
 from moor_env.envs.config import SCENARIO_FIELDS, SCENARIO_RANGES, SEED_FIELD, SEED_HIGH, Choice, EnvConfig, Uniform
 from moor_env.envs.equilibria import EquilibriumCache, plain_copy, scene_key, statics_scene_dict
 from moor_env.errors import ConfigError, SimulationDiverged, StaticsNotConverged
 from moor_env.physics import layout as L
-from moor_env.physics._jit import jit
 from moor_env.physics.environment import current_velocity
 from moor_env.physics.integrate import INTEGRATOR_IMPLICIT_EULER
 from moor_env.physics.vessels import track_state
@@ -84,6 +84,19 @@ OBS_OFFSET = np.array([row[2] for row in OBS_SPEC])
 OBS_SCALE = np.array([row[3] for row in OBS_SPEC])
 OBS_CLIP = 5.0
 
+
+
+def normalise_observations(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rows of raw observations (physical units, float64[n, len(OBS_NAMES)]) normalised, clipped to +-OBS_CLIP and
+    as float32, with a mask of the rows that were finite (a row that is not must be replaced by its slot's last
+    observation). Row by row the same numbers whatever the number of rows, so that the batched env's rows equal
+    the single env's observations."""
+    obs = (raw - OBS_OFFSET) / OBS_SCALE
+    finite = np.isfinite(obs).all(axis=1)
+    np.clip(obs, -OBS_CLIP, OBS_CLIP, out=obs)
+    return obs.astype(np.float32), finite
+
+
 # --- action ----------------------------------------------------------------------------------------------------
 ACTION_NAMES: tuple[str, ...] = ("spacing_rate", "payout_rate", "release")
 
@@ -100,12 +113,18 @@ PHASE_HOLD = "hold"
 @dataclass
 class Advance:
     """Integrate the core's simulator to ``t_end_s`` (to touchdown when ``detect_touchdown``) in steps of
-    ``dt_s``."""
+    ``dt_s``; with ``backup`` the kernel first saves the state into the core's slot buffers (see
+    ``InstallationCore.fallback``)."""
 
     t_end_s: float
     detect_touchdown: bool
     phase: str
     dt_s: float
+    backup: bool = False
+
+    def job(self, core: InstallationCore) -> tuple:
+        """This advance as a :class:`~moor_env.envs.batch.BatchAdvancer` job of ``core``'s simulator."""
+        return core.sim, self.t_end_s, self.detect_touchdown, self.dt_s, core.buffers, self.backup
 
 
 def apply_scene_overrides(base: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
@@ -377,29 +396,6 @@ def draw_scenario(cfg: EnvConfig, rng: np.random.Generator, options: dict[str, A
     return scenario
 
 
-@jit
-def line_summary(node_pos, seg_i, seg_f, line_i, line, material):
-    """Over the active segments of ``line``: the lowest node z, the lowest z of nodes on segments of
-    ``material`` (inf if none) and the total unstretched length [m].
-
-    One pass in a kernel because the observation needs it every step (numpy masks over the segment table cost
-    more than the rest of the observation).
-    """
-    start = line_i[line, L.LI_SEG_START]
-    z_min = math.inf
-    z_mat = math.inf
-    length = 0.0
-    for s in range(start, start + line_i[line, L.LI_SEG_CAP]):
-        if seg_i[s, L.SI_ACTIVE] != 1 or seg_i[s, L.SI_LINE] != line:
-            continue
-        z = min(node_pos[seg_i[s, L.SI_A], 2], node_pos[seg_i[s, L.SI_B], 2])
-        z_min = min(z_min, z)
-        if seg_i[s, L.SI_MAT] == material:
-            z_mat = min(z_mat, z)
-        length += seg_f[s, L.SF_L0]
-    return z_min, z_mat, length
-
-
 class InstallationCore:
     """One episode slot: a simulator started from a cached equilibrium and the RL bookkeeping around it.
 
@@ -425,8 +421,7 @@ class InstallationCore:
         self.last_obs = np.zeros(len(OBS_NAMES), dtype=np.float32)
         self.pending: Advance | None = None
         self.done = True
-        self.saved_state = None  # state before a coarse pre-release advance (see fallback)
-        self._backup = None  # the arrays saved_state reuses step after step
+        self.buffers: SlotBuffers | None = None  # the kernel's measures and state backup for this slot
         self._summary: tuple[Any, float, tuple[float, float, float]] | None = None  # (state, t, line summary)
         self.fallbacks = 0
         self.advancer = None  # the BatchAdvancer of run_advance, made on first use
@@ -487,6 +482,7 @@ class InstallationCore:
         sim.vessel_mean_m[:] = old.vessel_mean_m
         sim.tracks = old.tracks.copy()
         self.sim = sim
+        self.buffers = self._slot_buffers(sim, backup=False)  # the fall takes no backup
 
     def start(self, scenario: dict[str, Any]) -> Advance | None:
         """Build the simulator of a scenario at its hanging equilibrium; the warm-up to run, if any.
@@ -506,18 +502,19 @@ class InstallationCore:
         sim = Simulator(model)
         sim.state = state
         self.sim = sim
+        self.lines = {name: info.index for name, info in model.lines.items()}
+        fibre_index = model.material_names.index(scene.installation.fibre_material)
+        self.fibre_mat = fibre_index
+        self.buffers = self._slot_buffers(sim, backup=True)
         self.scenario = dict(scenario)
         self.statics_origin = origin
         self.depth = scene.environment.water_depth_m
         self.hs = scene.environment.sea_state.hs_m
         self.tp = scene.environment.sea_state.tp_s
         self.ramp_s = cfg.control.warmup_s if cfg.control.warmup_s > 0 else 2.0 * self.tp
-        self.lines = {name: info.index for name, info in model.lines.items()}
         self.vertical_chain_m = scene.installation.vertical_chain_length_m
         self.fairlead_depth_m = scene.installation.fairlead_depth_m
         self.chain_material = scene.installation.chain_material
-        fibre_index = model.material_names.index(scene.installation.fibre_material)
-        self.fibre_mat = fibre_index
         self.mbl = {name: min(scene.materials[m].mbl_n for m in info.materials) for name, info in model.lines.items()}
         self.release_unit_limit_n = scene.release_unit.max_release_load_n
         self.max_fall_s = scene.simulation.max_fall_time_s
@@ -525,7 +522,6 @@ class InstallationCore:
         self.payout_rate = 0.0
         self.steps = 0
         self.fallbacks = 0  # pre-release advances repeated at the scene's step (see fallback)
-        self.saved_state = None
         self.released = False
         self.fall_resolution: str | None = None
         self.done = False
@@ -544,8 +540,26 @@ class InstallationCore:
             self.pending = None
         return self.pending
 
+    def _slot_buffers(self, sim: Simulator, backup: bool) -> SlotBuffers:
+        """The kernel's buffers for ``sim``: measure what the observation reads (the mooring line summarised with
+        the fibre as the material), and a backup of the state where pre-release advances may take one."""
+        spec = [0] * B.N_SPEC
+        spec[B.SPEC_RELEASE_NODE] = sim.model.release_node
+        spec[B.SPEC_LINE] = self.lines["mooring_line"]
+        spec[B.SPEC_MATERIAL] = self.fibre_mat
+        spec[B.SPEC_WIRE] = self.lines.get("wire", -1)
+        spec[B.SPEC_VESSEL] = VESSEL_INSTALLATION
+        return SlotBuffers(spec, sim.state if backup else None)
+
     def finish_start(self, error: SimulationDiverged | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         """After the warm-up (if any): the first observation and the reset info."""
+        raw, info = self.finish_start_raw(error)
+        return self.observe_raw(raw), info
+
+    def finish_start_raw(self, error: SimulationDiverged | None = None
+                         ) -> tuple[list[float] | None, dict[str, Any]]:
+        """:meth:`finish_start` with the observation in physical units (None: keep the last observation), for
+        :meth:`observe_raw` or the vector env's normalisation of every slot at once."""
         sim = self.sim
         if error is not None:
             # keep the episode well defined: the first step ends it with the failure penalty
@@ -554,10 +568,10 @@ class InstallationCore:
         self.t0 = sim.state.t
         self.pending = None
         sim.state.line_f[:, L.LF_MAX_TENSION] = 0.0  # tension maxima count from the first observation
-        obs = self.observe() if error is None else self.last_obs.copy()
+        raw = self.raw_observation() if error is None else None
         info = {"scenario": dict(self.scenario), "sim_status": self.status, "statics": self.statics_origin,
                 "t_s": 0.0}
-        return obs, info
+        return raw, info
 
     # --- steps -------------------------------------------------------------------------------------------------
     def _pre_release(self, t_end_s: float, phase: str) -> Advance:
@@ -568,7 +582,7 @@ class InstallationCore:
         configured step (never below the scene's step), so the advance ends exactly at ``t_end_s`` and the
         release falls on the control grid. Only the implicit integrator takes the coarser step: the explicit
         ones are bound by the lines' axial stability limit whether or not the anchor falls. Before a step
-        coarser than the scene's the state is saved for :meth:`fallback`.
+        coarser than the scene's the kernel saves the state for :meth:`fallback` (``Advance.backup``).
         """
         sim = self.sim
         cfg = self.cfg.control
@@ -579,22 +593,24 @@ class InstallationCore:
         if sim.integrator_code == INTEGRATOR_IMPLICIT_EULER and step is not None:
             target = max(step, sim.dt)
         adv = Advance(t_end_s, False, phase, _even_step(t_end_s - sim.state.t, target))
-        self.saved_state = None
         if adv.dt_s > sim.dt:
-            self._backup = self.saved_state = sim.state.copy_into(self._backup)
+            adv.backup = True
+            backup = self.buffers.backup
+            backup.t = sim.state.t  # the kernel copies the arrays
+            backup.released = sim.state.released
         return adv
 
     def fallback(self, adv: Advance, error: SimulationDiverged | None) -> Advance | None:
-        """The advance to repeat at the scene's step, from the saved state, if ``adv`` diverged with a coarser
-        pre-release step; else None.
+        """The advance to repeat at the scene's step, from the state the kernel saved before ``adv``, if ``adv``
+        diverged with a coarser pre-release step; else None.
 
         A coarse pre-release step is an accuracy trade (``control.pre_release_dt_s``); it must never end an
         episode that the scene's own step would have carried through, so a blow-up with it is retried once.
         """
-        if error is None or self.saved_state is None or adv.dt_s <= self.sim.dt:
+        if error is None or not adv.backup or adv.dt_s <= self.sim.dt:
             return None
-        self.sim.state = self.saved_state
-        self.saved_state = self._backup = None  # the backup's arrays are the state now
+        # the saved state becomes the state; the diverged one's arrays are the next backup's buffers
+        self.sim.state, self.buffers.backup = self.buffers.backup, self.sim.state
         self.fallbacks += 1
         self.pending = Advance(adv.t_end_s, adv.detect_touchdown, adv.phase,
                                _even_step(adv.t_end_s - self.sim.state.t, self.sim.dt))
@@ -611,8 +627,12 @@ class InstallationCore:
         return float(v[VESSEL_SECOND, 0] - v[VESSEL_INSTALLATION, 0])
 
     def _mooring_line(self) -> tuple[float, float, float]:
-        """:func:`line_summary` of the mooring line with the fibre as the material (kept for the state and time
-        it was taken at: a step asks for it three times, and the state changes only by advancing)."""
+        """:func:`line_summary` of the mooring line with the fibre as the material: the kernel's measure where it
+        is current, else evaluated here (kept for the state and time it was taken at)."""
+        measured = self.buffers.current_measures(self.sim)
+        if measured is not None:
+            m = measured.tolist()
+            return m[B.M_LOOP_Z_M], m[B.M_FIBRE_Z_M], m[B.M_LINE_L0_M]
         st = self.sim.state
         cached = self._summary
         if cached is not None and cached[0] is st and cached[1] == st.t:
@@ -626,13 +646,14 @@ class InstallationCore:
         """Mooring line including the vertical chain [m] (unstretched)."""
         return self._mooring_line()[2] + self.vertical_chain_m
 
-    def begin_step(self, action: np.ndarray) -> Advance | None:
-        """Apply an action; the integration it needs (None when the episode ends without one)."""
+    def begin_step(self, action: np.ndarray | list[float]) -> Advance | None:
+        """Apply an action (3 numbers, or a list of 3 Python floats as the vector env passes its rows); the
+        integration it needs (None when the episode ends without one)."""
         cfg = self.cfg.control
         sim = self.sim
+        values = action if type(action) is list else np.asarray(action, dtype=np.float64).reshape(3).tolist()
         # clipped to [-1, 1]; NaN holds position and does not release
-        a = [0.0 if x != x else min(1.0, max(-1.0, x))
-             for x in np.asarray(action, dtype=np.float64).reshape(3).tolist()]
+        a = [0.0 if x != x else min(1.0, max(-1.0, x)) for x in values]
         if self.failed_at_start is not None:
             self.pending = None
             return None
@@ -687,6 +708,12 @@ class InstallationCore:
     def finish_step(self, status: int | None, error: SimulationDiverged | None
                     ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Observation, reward, terminated, truncated and info after the integration of ``begin_step``."""
+        raw, *rest = self.finish_step_raw(status, error)
+        return self.observe_raw(raw), *rest
+
+    def finish_step_raw(self, status: int | None, error: SimulationDiverged | None
+                        ) -> tuple[list[float] | None, float, bool, bool, dict[str, Any]]:
+        """:meth:`finish_step` with the observation in physical units (None: keep the last observation)."""
         rcfg = self.cfg.reward
         terms = dict.fromkeys(REWARD_TERMS, 0.0)
         phase = self.pending.phase if self.pending is not None else None
@@ -697,7 +724,7 @@ class InstallationCore:
                 self.status = f"diverged: {error}"
             terms["failure"] = -rcfg.failure_penalty
             terminated = True
-            obs = self.last_obs.copy()
+            raw = None
         else:
             if phase == PHASE_CONTROL:
                 self.steps += 1
@@ -719,22 +746,26 @@ class InstallationCore:
                 else:
                     self.status = "no touchdown within max_fall_time_s"
                     terms["no_touchdown"] = -rcfg.no_touchdown_penalty
-            obs = self.observe()
+            raw = self.raw_observation()
         reward = float(sum(terms.values()))
         self.done = terminated or truncated
         info = self.info(terms)
-        return obs, reward, terminated, truncated, info
+        return raw, reward, terminated, truncated, info
+
+    def _max_tensions_n(self) -> list[float]:
+        """Running maximum tension of each line [N], in the order of ``self.lines``."""
+        maxima = self.sim.state.line_f[:, L.LF_MAX_TENSION].tolist()
+        return [maxima[i] for i in self.lines.values()]
 
     def info(self, terms: dict[str, float]) -> dict[str, Any]:
         """Step info (see the env docstring)."""
-        st = self.sim.state
         info: dict[str, Any] = {
             "reward_terms": terms,
             "sim_status": self.status,
             "t_s": float(self.time_s) if self.failed_at_start is None else 0.0,
             "released": self.released,
             "spacing_m": self.spacing_m(),
-            "max_tension_n": {name: float(st.line_f[i, L.LF_MAX_TENSION]) for name, i in self.lines.items()},
+            "max_tension_n": dict(zip(self.lines, self._max_tensions_n(), strict=True)),
         }
         if self.released:
             info["fall_resolution"] = self.fall_resolution
@@ -744,14 +775,14 @@ class InstallationCore:
 
     def _check_limits(self, terms: dict[str, float]) -> None:
         rcfg = self.cfg.reward
-        st = self.sim.state
+        maxima = dict(zip(self.lines, self._max_tensions_n(), strict=True))
         if not self.flags["tension"]:
-            if any(st.line_f[i, L.LF_MAX_TENSION] > self.mbl[name] for name, i in self.lines.items()):
+            if any(maxima[name] > self.mbl[name] for name in self.lines):
                 self.flags["tension"] = True
                 terms["tension"] = -rcfg.tension_penalty
         if not self.flags["release_unit"] and "wire" in self.lines:
             # running maximum over the wire's segments: exceeds the load at the unit by at most the wire's weight
-            if st.line_f[self.lines["wire"], L.LF_MAX_TENSION] > self.release_unit_limit_n:
+            if maxima["wire"] > self.release_unit_limit_n:
                 self.flags["release_unit"] = True
                 terms["release_unit"] = -rcfg.release_unit_penalty
         if not self.flags["fibre_seabed"]:
@@ -786,65 +817,69 @@ class InstallationCore:
     def _fibre_clearance_m(self) -> float:
         return self._mooring_line()[1] + self.depth
 
-    def raw_observation(self) -> np.ndarray:
-        """Observation in physical units (see :data:`OBS_SPEC`).
-
-        Built from Python floats (``tolist``) rather than small numpy operations: it runs every step, and per-call
-        numpy overhead was most of its cost.
-        """
+    def _measures(self) -> list[float]:
+        """The kernel's ``M_*`` measures of the current state (:func:`moor_env.envs.batch.measure_scene`), measured
+        here where the state is not the one the kernel left (a reset without a warm-up)."""
         sim = self.sim
-        st = sim.state
-        m = sim.model
-        tensions = sim.top_tensions_n()
-        px, py, pz, vx, vy, vz, ex, ey, ez, wx, wy, wz = st.body_state[L.BS_POS:L.BS_OMEGA + 3].tolist()
-        w_axial = wx * ex + wy * ey + wz * ez
-        axis_rate = math.sqrt((wx - w_axial * ex) ** 2 + (wy - w_axial * ey) ** 2 + (wz - w_axial * ez) ** 2)
-        _, _, hz, _, _, hvz = track_state(sim.tracks, VESSEL_INSTALLATION, st.t, sim.env_f)
-        cx, cy, _ = current_velocity(0.0, sim.env_f, m.current_profile)
-        tip_z = pz + m.body_f[L.BF_S_TIP] * ez
-        loop_z, fibre_z, line_l0 = self._mooring_line()
-        rx, ry, rz = st.node_pos[m.release_node].tolist()
-        rvx, rvy, rvz = st.node_vel[m.release_node].tolist()
+        buffers = self.buffers
+        measured = buffers.current_measures(sim)
+        if measured is None:
+            st = sim.state
+            sim.top_tensions_n()  # the loads, where they are not current
+            measure_scene(st.t, st.node_pos, st.node_vel, st.body_state, st.seg_i, st.seg_f, st.line_i,
+                          sim.model.body_f, sim.env_f, sim.model.current_profile, sim.tracks, sim.work.top_tension,
+                          buffers.spec, buffers.measures)
+            measured = buffers.measures
+        return measured.tolist()
+
+    def raw_observation(self) -> list[float]:
+        """Observation in physical units (see :data:`OBS_SPEC`), from the kernel's measures and the slot's own
+        state (Python floats: it runs every step, where small numpy operations cost more than the arithmetic)."""
+        m = self._measures()
         ref = self.release_ref
-        fibre = fibre_z + self.depth
-        loop_bottom = loop_z + self.depth
-        return np.array([
+        fibre = m[B.M_FIBRE_Z_M] + self.depth
+        loop_bottom = m[B.M_LOOP_Z_M] + self.depth
+        return [
             self.time_s / self.cfg.control.max_pre_release_s,
             1.0 if self.released else 0.0,
             self.spacing_m(),
             self.spacing_rate,
-            (line_l0 + self.vertical_chain_m) / self.depth,
+            (m[B.M_LINE_L0_M] + self.vertical_chain_m) / self.depth,
             self.payout_rate,
-            rx - ref[0],
-            ry - ref[1],
-            rz - ref[2],
-            rvx,
-            rvy,
-            rvz,
-            sim.tilt_deg(),
-            math.degrees(axis_rate),
-            tensions.get("wire", 0.0) / 1e6,
-            tensions.get("mooring_line", 0.0) / 1e6,
-            hz + self.fairlead_depth_m,
-            hvz,
-            cx,
-            cy,
+            m[B.M_RELEASE_POS] - ref[0],
+            m[B.M_RELEASE_POS + 1] - ref[1],
+            m[B.M_RELEASE_POS + 2] - ref[2],
+            m[B.M_RELEASE_VEL],
+            m[B.M_RELEASE_VEL + 1],
+            m[B.M_RELEASE_VEL + 2],
+            m[B.M_TILT_DEG],
+            m[B.M_AXIS_RATE_DEG_S],
+            m[B.M_WIRE_TENSION_N] / 1e6,
+            m[B.M_LINE_TENSION_N] / 1e6,
+            m[B.M_HEAVE_M] + self.fairlead_depth_m,
+            m[B.M_HEAVE_RATE_M_S],
+            m[B.M_CURRENT_X_M_S],
+            m[B.M_CURRENT_Y_M_S],
             self.depth,
-            tip_z + self.depth,
+            m[B.M_TIP_Z_M] + self.depth,
             loop_bottom if math.isfinite(loop_bottom) else 0.0,
             fibre if math.isfinite(fibre) else 1000.0,
             self.hs,
             self.tp,
             self.vertical_chain_m,
-        ], dtype=np.float64)
+        ]
 
     def observe(self) -> np.ndarray:
         """Normalised float32 observation, clipped to +-OBS_CLIP; the last finite one if the state is not."""
-        obs = (self.raw_observation() - OBS_OFFSET) / OBS_SCALE
-        if not np.isfinite(obs).all():
-            return self.last_obs.copy()
-        np.clip(obs, -OBS_CLIP, OBS_CLIP, out=obs)
-        self.last_obs = obs.astype(np.float32)
+        return self.observe_raw(self.raw_observation())
+
+    def observe_raw(self, raw: list[float] | None) -> np.ndarray:
+        """The normalised observation of a :meth:`raw_observation` (None: the last observation); it becomes the
+        last observation where it is finite."""
+        if raw is not None:
+            obs, finite = normalise_observations(np.array([raw]))
+            if finite[0]:
+                self.last_obs = obs[0]
         return self.last_obs.copy()
 
     # --- drawing -----------------------------------------------------------------------------------------------
@@ -895,9 +930,12 @@ def run_advance(core: InstallationCore, adv: Advance, chunk_s: float | None = No
     sim = core.sim
     chunk_s = None if chunk_s is None or on_chunk is None else max(chunk_s, adv.dt_s)
     status = L.STATUS_TIME_LIMIT
+    backup = adv.backup  # the state before the first chunk is the one a fallback goes back to
     while sim.state.t < adv.t_end_s - 0.5 * adv.dt_s:
         t_stop = adv.t_end_s if chunk_s is None else min(sim.state.t + chunk_s, adv.t_end_s)
-        status, error = core.advancer.run({0: (sim, t_stop, adv.detect_touchdown, adv.dt_s)})[0]
+        job = (sim, t_stop, adv.detect_touchdown, adv.dt_s, core.buffers, backup)
+        status, error = core.advancer.run({0: job})[0]
+        backup = False
         retry = core.fallback(adv, error)
         if retry is not None:
             return run_advance(core, retry, chunk_s, on_chunk)

@@ -53,6 +53,24 @@ def motion_transfer(omega: np.ndarray, natural_period_s: float, damping_ratio: f
     return 1.0 / (1.0 - r**2 + 2j * damping_ratio * r)
 
 
+def wave_track_coefficients(sea: dict | None, gravity: float
+                            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(amplitude [m], omega [rad/s], wave number [1/m], phase [rad]) of each wave component of the vessels'
+    motion, the motion transfer included (:func:`fill_tracks`' arguments); empty arrays for a calm sea (None or
+    no amplitude). Constant for a sea state: a simulator computes them once, not on every window it samples."""
+    empty = np.zeros(0)
+    if sea is None or not np.any(sea["amplitude"] > 0):
+        return empty, empty, empty, empty
+    omega = sea["omega"]
+    transfer = motion_transfer(omega, sea["natural_period_s"], sea["damping_ratio"])
+    return sea["amplitude"] * np.abs(transfer), omega, omega**2 / gravity, sea["phase"] + np.angle(transfer)
+
+
+def track_samples(duration_s: float, sample_dt_s: float) -> int:
+    """Samples of a window of ``duration_s`` at ``sample_dt_s`` (one past its end, for the interpolation)."""
+    return int(math.ceil(duration_s / sample_dt_s)) + 2
+
+
 def sample_tracks(base_xyz: np.ndarray, spacing_velocity_m_s: np.ndarray, t0_s: float, duration_s: float,
                   sample_dt_s: float, sea: dict | None, gravity: float) -> np.ndarray:
     """Sample vessel positions and velocities on a uniform time grid.
@@ -75,17 +93,9 @@ def sample_tracks(base_xyz: np.ndarray, spacing_velocity_m_s: np.ndarray, t0_s: 
     ndarray, shape (n_vessels, n_samples, 6)
         Position [m] and velocity [m/s] at ``t0_s + k * sample_dt_s``.
     """
-    n_samples = int(math.ceil(duration_s / sample_dt_s)) + 2
-    tracks = np.empty((base_xyz.shape[0], n_samples, 6))
-    omega = amplitude = wavenumber = phase = np.zeros(0)
-    if sea is not None and np.any(sea["amplitude"] > 0):
-        omega = sea["omega"]
-        transfer = motion_transfer(omega, sea["natural_period_s"], sea["damping_ratio"])
-        amplitude = sea["amplitude"] * np.abs(transfer)
-        wavenumber = omega**2 / gravity
-        phase = sea["phase"] + np.angle(transfer)
+    tracks = np.empty((base_xyz.shape[0], track_samples(duration_s, sample_dt_s), 6))
     fill_tracks(tracks, t0_s, sample_dt_s, np.ascontiguousarray(base_xyz, dtype=np.float64),
-                np.ascontiguousarray(spacing_velocity_m_s, dtype=np.float64), amplitude, omega, wavenumber, phase)
+                np.ascontiguousarray(spacing_velocity_m_s, dtype=np.float64), *wave_track_coefficients(sea, gravity))
     return tracks
 
 

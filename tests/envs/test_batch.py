@@ -70,3 +70,73 @@ def test_new_tracks_are_read_on_every_call(hanging_sim):
     advancer.run({0: (sim, sim.state.t + 2.0, False, sim.dt)})
     twin.advance_to(twin.state.t + 2.0)
     np.testing.assert_allclose(sim.state.node_pos, twin.state.node_pos, rtol=0, atol=1e-9)
+
+
+def test_backup_holds_the_state_before_the_advance(hanging_sim):
+    """With ``take_backup`` the kernel copies the state before advancing (reference: a copy taken in Python,
+    equal bit for bit); the state itself moves on."""
+    from moor_env.envs.batch import SlotBuffers
+    from moor_env.simulation import STATE_ARRAY_FIELDS
+
+    sim = hanging_sim
+    sim.set_vessel_motion(sim.state.t, 0.5, np.full(sim.vessel_mean_m.shape[0], 0.3))
+    before = sim.state.copy()
+    buffers = SlotBuffers([-1] * 5, sim.state)
+    buffers.backup.node_pos[:] = 0.0  # stale contents must be overwritten
+    status, error = BatchAdvancer(1).run({0: (sim, sim.state.t + 0.5, False, sim.dt, buffers, True)})[0]
+    assert error is None
+    for name in STATE_ARRAY_FIELDS:
+        assert np.array_equal(getattr(buffers.backup, name), getattr(before, name)), name
+    assert not np.array_equal(sim.state.node_pos, before.node_pos)
+
+
+def test_backup_needs_buffers_with_a_backup_state(hanging_sim):
+    from moor_env.envs.batch import SlotBuffers
+
+    sim = hanging_sim
+    for buffers in (None, SlotBuffers([-1] * 5)):
+        with pytest.raises(ValueError, match="backup"):
+            BatchAdvancer(1).run({0: (sim, sim.state.t + 0.1, False, sim.dt, buffers, True)})
+
+
+def test_kernel_measures_equal_the_simulator_quantities(tiny):
+    """The observation's measures from the kernel (``moor_env.envs.batch.measure_scene`` after an advance)
+    against the same quantities from the Simulator's own methods and the physics functions, after a step in
+    waves with spacing and winch moves. Reference: those functions; tolerance 1e-9 relative (the kernel may
+    contract floating-point operations differently)."""
+    import gymnasium as gym
+
+    from moor_env.envs import batch as B
+    from moor_env.envs.batch import line_summary
+    from moor_env.physics.environment import current_velocity
+    from moor_env.physics.vessels import track_state
+
+    env = gym.make("moor_env/AnchorRelease-v0", config="tiny", overrides=tiny)
+    env.reset(seed=4, options={"sea_state_hs_m": 1.5, "current_scale": 1.0})
+    for _ in range(4):
+        env.step(np.array([0.6, 0.8, -1.0], np.float32))
+    core = env.unwrapped.core
+    sim, st = core.sim, core.sim.state
+    measured = core.buffers.current_measures(sim)
+    assert measured is not None  # the kernel's, of this state
+    tensions = sim.top_tensions_n()
+    loop_z, fibre_z, length = line_summary(st.node_pos, st.seg_i, st.seg_f, st.line_i, core.lines["mooring_line"],
+                                           core.fibre_mat)
+    _, _, hz, _, _, hvz = track_state(sim.tracks, 0, st.t, sim.env_f)
+    cx, cy, _ = current_velocity(0.0, sim.env_f, sim.model.current_profile)
+    e = st.body_state[6:9]
+    w = st.body_state[9:12]
+    expected = {
+        B.M_TILT_DEG: sim.tilt_deg(), B.M_AXIS_RATE_DEG_S: np.degrees(np.linalg.norm(w - (w @ e) * e)),
+        B.M_HEAVE_M: hz, B.M_HEAVE_RATE_M_S: hvz, B.M_CURRENT_X_M_S: cx, B.M_CURRENT_Y_M_S: cy,
+        B.M_TIP_Z_M: sim.tip_state()[0][2], B.M_LOOP_Z_M: loop_z, B.M_FIBRE_Z_M: fibre_z, B.M_LINE_L0_M: length,
+        B.M_WIRE_TENSION_N: tensions["wire"], B.M_LINE_TENSION_N: tensions["mooring_line"],
+        **{B.M_RELEASE_POS + c: st.node_pos[sim.model.release_node, c] for c in range(3)},
+        **{B.M_RELEASE_VEL + c: st.node_vel[sim.model.release_node, c] for c in range(3)},
+    }
+    assert sorted(expected) == list(range(B.N_MEASURES))
+    assert abs(cx) > 0.01 and abs(hz + core.fairlead_depth_m) > 1e-5  # current and waves (small here) are exercised
+    for index, value in expected.items():
+        assert measured[index] == pytest.approx(value, rel=1e-9, abs=1e-9), index
+    sim.set_payout_rate("mooring_line", 0.0)  # any change in place: the measures are no longer current
+    assert core.buffers.current_measures(sim) is None

@@ -104,7 +104,7 @@ def test_derived_model_equals_compiled(tiny, fall):
 def test_merge_infos_equals_gymnasium_add_info(tiny):
     """The batched env's one-pass info merge against Gymnasium's env-by-env ``_add_info`` on real step, touchdown
     and reset infos (keys present in some envs only, nested dicts, strings, bools, floats)."""
-    from moor_env.envs.vector import merge_infos
+    from moor_env.envs.vector import _same_layout, merge_infos
 
     env = gym.make("moor_env/AnchorRelease-v0", config="tiny", overrides=tiny)
     infos = [env.reset(seed=0)[1]]
@@ -128,6 +128,23 @@ def test_merge_infos_equals_gymnasium_add_info(tiny):
                 assert all(x == y for x, y in zip(a[key].tolist(), b[key].tolist(), strict=True)), key
 
     check(merged, expected)
+    # every slot with the same keys (the usual step): the all-slots path, against the same reference
+    envs = _stepped_envs(tiny, 3)
+    vector = AnchorReleaseVectorEnv(num_envs=3, config="tiny", overrides=tiny)
+    for action in ([0.0, 0.0, -1.0], [0.0, 0.0, 1.0]):  # a control step, then touchdown infos
+        same = list(enumerate(env.step(np.array(action, np.float32))[4] for env in envs))
+        assert _same_layout(same)
+        expected = {}
+        for i, info in same:
+            expected = vector._add_info(expected, info, i)
+        check(merge_infos(same, 3), expected)
+
+
+def _stepped_envs(tiny, n: int) -> list:
+    envs = [gym.make("moor_env/AnchorRelease-v0", config="tiny", overrides=tiny) for _ in range(n)]
+    for seed, env in enumerate(envs):
+        env.reset(seed=seed)
+    return envs
 
 
 def test_batched_fallback_matches_single_env(tiny):
