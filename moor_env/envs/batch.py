@@ -53,9 +53,9 @@ from numba.extending import intrinsic
 
 from moor_env.errors import SimulationDiverged
 from moor_env.physics import layout as L
+from moor_env.physics.environment import current_velocity
 from moor_env.physics.integrate import advance, compute_accelerations
 from moor_env.physics.line import top_tensions
-from moor_env.physics.environment import current_velocity
 from moor_env.physics.vessels import track_state
 from moor_env.simulation import STATE_ARRAY_FIELDS, SimState, Simulator
 

@@ -39,7 +39,7 @@ from moor_env.config import (
 from moor_env.envs import batch as B
 from moor_env.envs.batch import BatchAdvancer, SlotBuffers, line_summary, measure_scene
 from moor_env.envs.config import SCENARIO_FIELDS, SCENARIO_RANGES, SEED_FIELD, SEED_HIGH, Choice, EnvConfig, Uniform
-from moor_env.envs.equilibria import EquilibriumCache, plain_copy, scene_key, statics_scene_dict
+from moor_env.envs.equilibria import EquilibriumCache, plain_copy, scene_key, scene_text, statics_scene_dict
 from moor_env.errors import ConfigError, SimulationDiverged, StaticsNotConverged
 from moor_env.physics import layout as L
 from moor_env.physics.environment import current_velocity
@@ -83,7 +83,6 @@ OBS_UNITS: tuple[str, ...] = tuple(row[1] for row in OBS_SPEC)
 OBS_OFFSET = np.array([row[2] for row in OBS_SPEC])
 OBS_SCALE = np.array([row[3] for row in OBS_SPEC])
 OBS_CLIP = 5.0
-
 
 
 def normalise_observations(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -263,8 +262,9 @@ class SceneFactory:
             data["environment"]["current"]["direction_deg"] = 0.0
         return data
 
-    def episode_scene(self, scenario: dict[str, Any]) -> tuple[SceneConfig, dict[str, Any], SceneConfig]:
-        """The scenario's validated scene, its statics mapping and that mapping's validated scene.
+    def episode_scene(self, scenario: dict[str, Any]) -> tuple[SceneConfig, dict[str, Any], SceneConfig, str]:
+        """The scenario's validated scene, its statics mapping, that mapping's validated scene and its
+        :func:`~moor_env.envs.equilibria.scene_text` (the cache keys' text).
 
         The statics scene is validated once per equilibrium (cached); the episode scene is it with the
         scenario's ``environment``, ``installation``, chain material and fall integrator validated on their own,
@@ -279,7 +279,8 @@ class SceneFactory:
         """
         data = self.scene_data(scenario)
         statics_data = self.statics_data(scenario, data)
-        key = scene_key(statics_data, "")
+        text = scene_text(statics_data)
+        key = scene_key(statics_data, "", text)
         statics = self.statics_scenes.get(key)
         try:
             if statics is None:
@@ -297,12 +298,12 @@ class SceneFactory:
             scene = statics.model_copy(update=update)
             check_scene_consistency(scene)
         except (ConfigError, ValidationError):
-            return self.scene(scenario), statics_data, statics  # raises the keyed error
+            return self.scene(scenario), statics_data, statics, text  # raises the keyed error
         self.statics_scenes[key] = statics
         self.statics_scenes.move_to_end(key)
         while len(self.statics_scenes) > self.STATICS_SCENE_ENTRIES:
             self.statics_scenes.popitem(last=False)
-        return scene, statics_data, statics
+        return scene, statics_data, statics, text
 
     def scene(self, scenario: dict[str, Any]):
         """Validated scene of a scenario.
@@ -439,10 +440,11 @@ class InstallationCore:
             self._models.move_to_end(key)
         return base
 
-    def _model(self, scene: SceneConfig, statics_data: dict[str, Any], statics: SceneConfig) -> Model:
-        """Compiled model of ``scene``: the model of the statics scene ``statics`` (cached) with the episode's sea
-        state and chain Cd_t (:func:`derive_model`), so that a new sea state costs no compile."""
-        self.statics_key = scene_key(statics_data, self.cache.source_hash)
+    def _model(self, scene: SceneConfig, statics_data: dict[str, Any], statics: SceneConfig, text: str) -> Model:
+        """Compiled model of ``scene``: the model of the statics scene ``statics`` (mapping ``statics_data``, of
+        :func:`~moor_env.envs.equilibria.scene_text` ``text``; cached) with the episode's sea state and chain Cd_t
+        (:func:`derive_model`), so that a new sea state costs no compile."""
+        self.statics_key = scene_key(statics_data, self.cache.source_hash, text)
         return derive_model(self._compiled(self.statics_key, statics), scene)
 
     def _fall_model(self, keys: dict[str, Any]) -> Model:
@@ -493,10 +495,10 @@ class InstallationCore:
             If the scenario gives no valid scene or no equilibrium.
         """
         cfg = self.cfg
-        scene, statics_data, statics = self.factory.episode_scene(scenario)
-        model = self._model(scene, statics_data, statics)
+        scene, statics_data, statics, text = self.factory.episode_scene(scenario)
+        model = self._model(scene, statics_data, statics, text)
         self.statics_scene = statics
-        state, origin = self.cache.state(statics_data)
+        state, origin = self.cache.state(statics_data, text)
         if state.node_pos.shape != model.node_pos0.shape or state.seg_i.shape != model.seg_i.shape:
             raise StaticsNotConverged("cached equilibrium does not match the compiled scene's topology")
         sim = Simulator(model)

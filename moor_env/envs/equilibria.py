@@ -74,21 +74,37 @@ def plain_copy(data: Any) -> Any:
 
 def statics_scene_dict(scene_data: dict[str, Any], chain_material: str, nominal_chain_cd_t: float) -> dict[str, Any]:
     """The scene mapping the equilibrium is solved for: sea state calm, no pre-release rates, nominal Cd_t, no
-    fall integrator."""
-    data = plain_copy(scene_data)
-    data["environment"]["sea_state"] = {}
-    inst = data["installation"]
-    inst["release_time_s"] = 0.0
-    inst["spacing_rate_m_s"] = 0.0
-    inst["payout_rate_m_s"] = 0.0
-    data["materials"][chain_material]["cd_tangential"] = nominal_chain_cd_t
-    data.get("discretization", {}).pop("fall_integrator", None)  # the fall's: no part of the hanging state
+    fall integrator.
+
+    Only the branches it changes are copied (``environment`` with its ``current``, ``installation``, the materials
+    and ``discretization``); the rest is shared with ``scene_data``, which every reset made afresh (a deep copy
+    cost about as much as the rest of the reset's scene bookkeeping).
+    """
+    data = dict(scene_data)
+    environment = scene_data["environment"]
+    data["environment"] = {**environment, "sea_state": {}}
+    if "current" in environment:
+        data["environment"]["current"] = dict(environment["current"])
+    data["installation"] = {**scene_data["installation"], "release_time_s": 0.0, "spacing_rate_m_s": 0.0,
+                            "payout_rate_m_s": 0.0}
+    materials = dict(scene_data["materials"])
+    materials[chain_material] = {**materials[chain_material], "cd_tangential": nominal_chain_cd_t}
+    data["materials"] = materials
+    if "discretization" in data:  # the fall's integrator: no part of the hanging state
+        data["discretization"] = {k: v for k, v in data["discretization"].items() if k != "fall_integrator"}
     return data
 
 
-def scene_key(data: dict[str, Any], source_hash: str) -> str:
-    """Cache key of a statics scene mapping."""
-    text = json.dumps(data, sort_keys=True, default=str)
+def scene_text(data: dict[str, Any]) -> str:
+    """The canonical JSON text of a scene mapping that its cache keys hash (made once per reset and passed on: it
+    costs about 50 us for the default scene, and a reset needs three keys of it)."""
+    return json.dumps(data, sort_keys=True, default=str)
+
+
+def scene_key(data: dict[str, Any], source_hash: str, text: str | None = None) -> str:
+    """Cache key of a statics scene mapping (``text``: its :func:`scene_text`, where already made)."""
+    if text is None:
+        text = scene_text(data)
     return hashlib.sha256((source_hash + text).encode()).hexdigest()[:32]
 
 
@@ -125,15 +141,16 @@ class EquilibriumCache:
         self.solves = 0
         self.solve_wall_s = 0.0
 
-    def state(self, statics_data: dict[str, Any]) -> tuple[SimState, str]:
-        """Equilibrium state (a private copy) of a statics scene mapping, and where it came from.
+    def state(self, statics_data: dict[str, Any], text: str | None = None) -> tuple[SimState, str]:
+        """Equilibrium state (a private copy) of a statics scene mapping (``text``: its :func:`scene_text`, where
+        already made), and where it came from.
 
         Raises
         ------
         ConfigError, StaticsNotConverged
             From the scene validation or the solver.
         """
-        key = scene_key(statics_data, self.source_hash)
+        key = scene_key(statics_data, self.source_hash, text)
         if self.config.memory_entries > 0 and key in self.memory:
             self.memory.move_to_end(key)
             self.hits += 1

@@ -85,24 +85,36 @@ def _same_layout(infos: list[tuple[int, dict[str, Any]]]) -> bool:
 
 def _merge_full(infos: list[tuple[int, dict[str, Any]]]) -> dict[str, Any]:
     """:func:`merge_infos` of infos that :func:`_same_layout` accepts: every key present in every slot, so every
-    mask is all True and no per-slot assignment is needed."""
+    mask is all True and no per-slot assignment is needed. The keys whose first value is a Python float (most of
+    them: reward terms, times, tensions) go into one array in one call, each key a row of it."""
     num_envs = len(infos)
+    dicts = [info for _, info in infos]
+    first = dicts[0]
+    floats = [key for key, value in first.items() if type(value) is float]
+    rows = {}
+    if floats:
+        block = np.array([[d[key] for key in floats] for d in dicts], dtype=np.float64).T.copy()
+        rows = dict(zip(floats, block, strict=True))
+    masks = np.ones((len(first), num_envs), dtype=np.bool_)
     out: dict[str, Any] = {}
-    for key, first in infos[0][1].items():
-        kind = type(first)
-        if isinstance(first, dict):
-            nested = [(i, info[key]) for i, info in infos]
-            array = merge_infos(nested, num_envs)
-        elif kind in (int, float, bool) or issubclass(kind, np.number):
-            array = np.array([info[key] for _, info in infos], dtype=kind)
-        elif isinstance(first, np.ndarray):
-            array = np.zeros((num_envs, *first.shape), dtype=first.dtype)
-            for i, info in infos:
-                array[i] = info[key]
-        else:
+    for k, (key, value) in enumerate(first.items()):
+        kind = type(value)
+        if key in rows:
+            array = rows[key]
+        elif isinstance(value, dict):
+            array = merge_infos([(i, info[key]) for i, info in infos], num_envs)
+        elif kind in (int, bool) or issubclass(kind, np.number):
+            array = np.array([d[key] for d in dicts], dtype=kind)
+        elif isinstance(value, np.ndarray):
+            array = np.zeros((num_envs, *value.shape), dtype=value.dtype)
+            for i, d in enumerate(dicts):
+                array[i] = d[key]
+        elif kind is str:
             array = np.full(num_envs, fill_value=None, dtype=object)
-            array[:] = [info[key] for _, info in infos] if kind is str else _object_items(infos, key)
-        out[key], out[f"_{key}"] = array, np.ones(num_envs, dtype=np.bool_)
+            array[:] = [d[key] for d in dicts]
+        else:
+            array = _object_items(infos, key)
+        out[key], out[f"_{key}"] = array, masks[k]
     return out
 
 
