@@ -20,8 +20,9 @@ After each scene's advance the kernel evaluates the loads and the lines' top ten
 that work runs on the batch's threads. An env slot also passes :class:`SlotBuffers`: the kernel then writes the
 quantities its observation reads (``M_*``, :func:`measure_scene`) and, where the advance asks for it, first copies
 the state into a backup (the env repeats a diverged coarse pre-release advance from it). Both had been Python on
-every env step (a numpy copy of nine arrays, a dozen small kernel and numpy calls), together about a fifth of the
-batched env's per-slot Python.
+every env step (a numpy copy of nine arrays, a dozen small kernel and numpy calls); with them moved here (and the
+observations normalised for all slots at once) the batched env's Python per slot and step went from about 68 to
+48 us (calm default scene, 16 slots, one thread, profiler off).
 
 Why the single env goes through this kernel too (with one scene): LLVM optimises ``advance`` together with its
 caller (inlining, constant arguments), and with the kernels' fastmath ``contract`` flag the fused multiply-adds
