@@ -423,7 +423,6 @@ class InstallationCore:
         self.pending: Advance | None = None
         self.done = True
         self.buffers: SlotBuffers | None = None  # the kernel's measures and state backup for this slot
-        self._summary: tuple[Any, float, tuple[float, float, float]] | None = None  # (state, t, line summary)
         self.fallbacks = 0
         self.advancer = None  # the BatchAdvancer of run_advance, made on first use
 
@@ -505,8 +504,7 @@ class InstallationCore:
         sim.state = state
         self.sim = sim
         self.lines = {name: info.index for name, info in model.lines.items()}
-        fibre_index = model.material_names.index(scene.installation.fibre_material)
-        self.fibre_mat = fibre_index
+        self.fibre_mat = model.material_names.index(scene.installation.fibre_material)
         self.buffers = self._slot_buffers(sim, backup=True)
         self.scenario = dict(scenario)
         self.statics_origin = origin
@@ -630,19 +628,14 @@ class InstallationCore:
 
     def _mooring_line(self) -> tuple[float, float, float]:
         """:func:`line_summary` of the mooring line with the fibre as the material: the kernel's measure where it
-        is current, else evaluated here (kept for the state and time it was taken at)."""
+        is current (every step after its advance), else evaluated here (after a reset without a warm-up or an
+        in-place change such as the release)."""
         measured = self.buffers.current_measures(self.sim)
         if measured is not None:
             m = measured.tolist()
             return m[B.M_LOOP_Z_M], m[B.M_FIBRE_Z_M], m[B.M_LINE_L0_M]
         st = self.sim.state
-        cached = self._summary
-        if cached is not None and cached[0] is st and cached[1] == st.t:
-            return cached[2]
-        summary = line_summary(st.node_pos, st.seg_i, st.seg_f, st.line_i, self.lines["mooring_line"],
-                               self.fibre_mat)
-        self._summary = (st, st.t, summary)
-        return summary
+        return line_summary(st.node_pos, st.seg_i, st.seg_f, st.line_i, self.lines["mooring_line"], self.fibre_mat)
 
     def line_length_total_m(self) -> float:
         """Mooring line including the vertical chain [m] (unstretched)."""
