@@ -185,8 +185,10 @@ def main(argv: list[str] | None = None) -> dict:
                     lambda o=overrides: bench_batched(2, episodes, 2, o),
                     lambda o=overrides: bench_batched(8, episodes, 2, o),
                     lambda o=overrides: bench_batched(16, episodes, 2, o),
+                    lambda o=overrides: bench_batched(32, episodes, 2, o),
                     lambda o=overrides: bench_batched(8, episodes, 1, o),
-                    lambda o=overrides: bench_workers(16, episodes, 2, o)]
+                    lambda o=overrides: bench_workers(16, episodes, 2, o),
+                    lambda o=overrides: bench_workers(32, episodes, 2, o)]
             for run in runs:
                 rows.append({"variant": label, "round": round_index, **_rates(run())})
                 print(rows[-1], flush=True)

@@ -202,7 +202,8 @@ class AnchorReleaseEnv(gym.Env):
 
     ``gym.make_vec("moor_env/AnchorRelease-v0", num_envs=n)`` returns the batched vector env
     (``moor_env.envs.AnchorReleaseVectorEnv``, one kernel call per thread group per step; ``num_workers=k``
-    splits it over k processes, ``moor_env.envs.sharded.ShardedVectorEnv``);
+    splits it over k processes, this one included, ``moor_env.envs.sharded.ShardedVectorEnv``: on this project's
+    2-core machine ``num_workers=2`` is the fastest, see the README's "Speed of the envs");
     ``vectorization_mode="sync"`` or ``"async"`` give Gymnasium's vector envs of this env.
 
     ``info`` holds ``reward_terms``, ``sim_status`` (running, touchdown, time limit, diverged: ..., no touchdown

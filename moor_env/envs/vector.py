@@ -7,7 +7,8 @@ batch kernel (:mod:`moor_env.envs.batch`: one numba call per group of scenes, th
 threads). Row i equals ``AnchorReleaseEnv`` reset with seed ``seed + i`` and given the same actions, bit for
 bit (tested), including next-step autoreset as Gymnasium's ``SyncVectorEnv`` does it. Equilibria are shared
 between the slots (one cache). With ``num_workers`` > 1 the entry point (:func:`make_vector_env`) returns
-:class:`~moor_env.envs.sharded.ShardedVectorEnv` instead: the slots split over that many processes.
+:class:`~moor_env.envs.sharded.ShardedVectorEnv` instead: the slots split over that many processes (this one
+and ``num_workers - 1`` workers).
 """
 
 from __future__ import annotations
@@ -320,10 +321,12 @@ def make_vector_env(num_envs: int = 1, num_workers: int = 1, **kwargs: Any) -> V
 
     ``num_workers`` 1 (default): :class:`AnchorReleaseVectorEnv` in this process, the kernel on ``num_threads``
     threads. More: :class:`~moor_env.envs.sharded.ShardedVectorEnv`, the slots split over that many processes
-    (``context`` picks the start method), which also spreads the per-scene Python over the cores.
+    (this one steps the first shard, ``k - 1`` workers the others; ``context`` picks the start method and
+    ``spin_s`` how long a process polls its pipe), which also spreads the per-scene Python over the cores.
     """
     if num_workers == 1:
         kwargs.pop("context", None)
+        kwargs.pop("spin_s", None)
         return AnchorReleaseVectorEnv(num_envs, **kwargs)
     if "num_threads" in kwargs:
         raise ConfigError("num_threads", kwargs["num_threads"], "not set with num_workers > 1 (one thread each)")

@@ -68,14 +68,38 @@ def test_sharded_rows_and_infos_equal_the_batched_env(tiny):
 
 def test_worker_failure_is_raised_in_the_main_process(tiny):
     env = ShardedVectorEnv(num_envs=2, num_workers=2, config="tiny", overrides=tiny)
-    with pytest.raises(RuntimeError, match="call reset"):
+    with pytest.raises(RuntimeError, match="call reset"):  # both shards refuse
         env.step(np.zeros((2, 3), np.float32))
     env.close()
+    # only the local shard (slot 0) reset: the worker's failure comes back with its traceback (a failed worker
+    # ends, as gymnasium's AsyncVectorEnv workers do)
+    env = ShardedVectorEnv(num_envs=2, num_workers=2, config="tiny", overrides=tiny)
+    env.reset(seed=1, options={"reset_mask": np.array([True, False])})
+    with pytest.raises(RuntimeError, match=r"worker 1 \(slots 1\.\.1\):(.|\n)*call reset"):
+        env.step(np.zeros((2, 3), np.float32))
+    env.close()
+    assert env.processes == [] and env.local is None
+
+
+def test_blocking_workers_give_the_same_rows(tiny):
+    """spin_s=0 (block on the pipe at once) changes only when a process wakes, never a result."""
+    envs = [ShardedVectorEnv(num_envs=3, num_workers=2, config="tiny", overrides=tiny, spin_s=s) for s in (0, 0.01)]
+    outs = [env.reset(seed=3)[0] for env in envs]
+    assert np.array_equal(*outs)
+    act = np.tile(np.array([0.3, -0.2, -1.0], np.float32), (3, 1))
+    for _ in range(5):
+        outs = [env.step(act) for env in envs]
+        for k in range(4):
+            assert np.array_equal(outs[0][k], outs[1][k])
+    for env in envs:
+        env.close()
 
 
 def test_bad_worker_settings_name_the_field(tiny):
     with pytest.raises(ConfigError, match="num_workers"):
         ShardedVectorEnv(num_envs=2, num_workers=0, config="tiny", overrides=tiny)
+    with pytest.raises(ConfigError, match="spin_s"):
+        ShardedVectorEnv(num_envs=2, num_workers=2, config="tiny", overrides=tiny, spin_s=-1.0)
     with pytest.raises(ConfigError, match="num_threads"):
         gym.make_vec("moor_env/AnchorRelease-v0", num_envs=2, vectorization_mode="vector_entry_point",
                      config="tiny", overrides=tiny, num_workers=2, num_threads=2)
