@@ -14,6 +14,7 @@ is driven by the seeded random controls of ``benchmarks/pre_release_step.py``. C
   fidelity;
 * ``default``: what the env does (in waves: tight_line with its ``in_waves`` keys, a 1 m loop chain, throughout;
   the implicit fall at the model's 11.25 ms step);
+* ``default, fall at 2x its step``: the same with the implicit fall at twice the model's step (22.5 ms in waves);
 * ``tight_line, 0.5 m loop``: the reference's resolution with the implicit fall (5.6 ms), the env's choice in
   waves before the ``in_waves`` keys;
 * ``coarse throughout``: the coarse resolution (2/2/20/30 m) before and after the release, implicit;
@@ -62,14 +63,16 @@ FIGURE = ROOT / "docs" / "fall-snap.png"
 FAST_M_S = 25.8  # the reference's clean landings reach 25.9-26.5 m/s on the default geometry
 VERTICAL_DEG = 1.0
 TRACE_INTERVAL_S = 0.01
-# name, env overrides, pre-release resolution forced ({}: coarse; None: the env's), fall resolution (False: env's)
+# name, env overrides, pre-release resolution forced ({}: coarse; None: the env's), fall resolution (False: env's),
+# fall step as a multiple of the fall model's step
 CASES = (
-    ("reference", EXPLICIT_FALL, TIGHT, TIGHT),
-    ("default", {}, None, False),
-    ("tight_line, 0.5 m loop", {}, TIGHT, TIGHT),
-    ("coarse throughout", {}, {}, None),
-    ("coarse, fine fall", {}, {}, TIGHT),
-    ("coarse, explicit fall", EXPLICIT_FALL, {}, None),
+    ("reference", EXPLICIT_FALL, TIGHT, TIGHT, 1.0),
+    ("default", {}, None, False, 1.0),
+    ("default, fall at 2x its step", {}, None, False, 2.0),
+    ("tight_line, 0.5 m loop", {}, TIGHT, TIGHT, 1.0),
+    ("coarse throughout", {}, {}, None, 1.0),
+    ("coarse, fine fall", {}, {}, TIGHT, 1.0),
+    ("coarse, explicit fall", EXPLICIT_FALL, {}, None, 1.0),
 )
 
 
@@ -173,7 +176,10 @@ def main(argv: list[str] | None = None) -> dict:
     args = parser.parse_args(argv)
     load_before = os.getloadavg()[0]
     sea = {"scenario.sea_state_hs_m": 0.0} if args.calm else {}
-    envs = {name: make_case_env({**sea, **ov}, pre, fall) for name, ov, pre, fall in CASES}
+    envs = {name: make_case_env({**sea, **ov}, pre, fall) for name, ov, pre, fall, _ in CASES}
+    for name, *_, factor in CASES:
+        if factor != 1.0:
+            scale_fall_step(envs[name].unwrapped.core, factor)
     rows = []
     for seed in tqdm(range(1000, 1000 + args.episodes), desc="episodes"):
         for name, env in envs.items():

@@ -298,18 +298,27 @@ class SlotBuffers:
         The state before the last advance that took a backup (its ``t`` and ``released`` set by the caller).
     """
 
-    __slots__ = ("spec", "measures", "record", "backup")
+    __slots__ = ("spec", "measures", "record", "backup", "_values", "_values_record")
 
     def __init__(self, spec, state: SimState | None = None) -> None:
         self.spec = np.array(spec, dtype=np.int64).reshape(N_SPEC)
         self.measures = np.full(N_MEASURES, np.nan)
         self.record = None
         self.backup = None if state is None else state.copy()
+        self._values: list[float] = []
+        self._values_record = None
 
-    def current_measures(self, sim: Simulator) -> np.ndarray | None:
-        """The measures if they are of ``sim``'s current state (nothing changed it since the kernel measured)."""
+    def current_measures(self, sim: Simulator) -> list[float] | None:
+        """The measures as Python floats if they are of ``sim``'s current state (nothing changed it since the kernel
+        measured), else None. Converted once per advance (an env step reads them several times), so the list is shared:
+        read it, do not change it."""
         record = self.record
-        return self.measures if record is not None and sim.loads_record() is record else None
+        if record is None or sim.loads_record() is not record:
+            return None
+        if self._values_record is not record:
+            self._values = self.measures.tolist()
+            self._values_record = record
+        return self._values
 
 
 _NO_SPEC = np.zeros(0, dtype=np.int64)  # a job without SlotBuffers: the kernel measures nothing

@@ -630,9 +630,8 @@ class InstallationCore:
         """:func:`line_summary` of the mooring line with the fibre as the material: the kernel's measure where it
         is current (every step after its advance), else evaluated here (after a reset without a warm-up or an
         in-place change such as the release)."""
-        measured = self.buffers.current_measures(self.sim)
-        if measured is not None:
-            m = measured.tolist()
+        m = self.buffers.current_measures(self.sim)
+        if m is not None:
             return m[B.M_LOOP_Z_M], m[B.M_FIBRE_Z_M], m[B.M_LINE_L0_M]
         st = self.sim.state
         return line_summary(st.node_pos, st.seg_i, st.seg_f, st.line_i, self.lines["mooring_line"], self.fibre_mat)
@@ -714,6 +713,7 @@ class InstallationCore:
         phase = self.pending.phase if self.pending is not None else None
         self.pending = None
         terminated = truncated = False
+        maxima = self._max_tensions_n()
         if self.failed_at_start is not None or error is not None:
             if error is not None:
                 self.status = f"diverged: {error}"
@@ -724,17 +724,17 @@ class InstallationCore:
             if phase == PHASE_CONTROL:
                 self.steps += 1
                 terms["time"] = -rcfg.time_cost_per_s * self.cfg.control.interval_s
-                self._check_limits(terms)
+                self._check_limits(terms, maxima)
                 if self.steps >= self.max_steps:
                     truncated = True
                     terms["truncation"] = -rcfg.truncation_penalty
                     self.status = "time limit"
             elif phase == PHASE_HOLD:
                 terms["time"] = -rcfg.time_cost_per_s * (self.sim.state.t - self.hold_start_s)
-                self._check_limits(terms)
+                self._check_limits(terms, maxima)
             else:  # the fall
                 terminated = True
-                self._check_limits(terms)
+                self._check_limits(terms, maxima)
                 if status == L.STATUS_TOUCHDOWN:
                     self.status = "touchdown"
                     self._touchdown_terms(terms)
@@ -744,23 +744,23 @@ class InstallationCore:
             raw = self.raw_observation()
         reward = float(sum(terms.values()))
         self.done = terminated or truncated
-        info = self.info(terms)
+        info = self.info(terms, maxima)
         return raw, reward, terminated, truncated, info
 
-    def _max_tensions_n(self) -> list[float]:
-        """Running maximum tension of each line [N], in the order of ``self.lines``."""
+    def _max_tensions_n(self) -> dict[str, float]:
+        """Running maximum tension of each line by name [N]."""
         maxima = self.sim.state.line_f[:, L.LF_MAX_TENSION].tolist()
-        return [maxima[i] for i in self.lines.values()]
+        return {name: maxima[i] for name, i in self.lines.items()}
 
-    def info(self, terms: dict[str, float]) -> dict[str, Any]:
-        """Step info (see the env docstring)."""
+    def info(self, terms: dict[str, float], max_tension_n: dict[str, float] | None = None) -> dict[str, Any]:
+        """Step info (see the env docstring); ``max_tension_n``: :meth:`_max_tensions_n` if already read."""
         info: dict[str, Any] = {
             "reward_terms": terms,
             "sim_status": self.status,
             "t_s": float(self.time_s) if self.failed_at_start is None else 0.0,
             "released": self.released,
             "spacing_m": self.spacing_m(),
-            "max_tension_n": dict(zip(self.lines, self._max_tensions_n(), strict=True)),
+            "max_tension_n": self._max_tensions_n() if max_tension_n is None else max_tension_n,
         }
         if self.released:
             info["fall_resolution"] = self.fall_resolution
@@ -768,9 +768,9 @@ class InstallationCore:
             info["touchdown"] = dict(self.touchdown)
         return info
 
-    def _check_limits(self, terms: dict[str, float]) -> None:
+    def _check_limits(self, terms: dict[str, float], maxima: dict[str, float]) -> None:
+        """Penalties of the limits first exceeded in this step; ``maxima``: :meth:`_max_tensions_n`."""
         rcfg = self.cfg.reward
-        maxima = dict(zip(self.lines, self._max_tensions_n(), strict=True))
         if not self.flags["tension"]:
             if any(maxima[name] > self.mbl[name] for name in self.lines):
                 self.flags["tension"] = True
@@ -824,8 +824,8 @@ class InstallationCore:
             measure_scene(st.t, st.node_pos, st.node_vel, st.body_state, st.seg_i, st.seg_f, st.line_i,
                           sim.model.body_f, sim.env_f, sim.model.current_profile, sim.tracks, sim.work.top_tension,
                           buffers.spec, buffers.measures)
-            measured = buffers.measures
-        return measured.tolist()
+            measured = buffers.measures.tolist()
+        return measured
 
     def raw_observation(self) -> list[float]:
         """Observation in physical units (see :data:`OBS_SPEC`), from the kernel's measures and the slot's own

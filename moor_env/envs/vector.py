@@ -86,16 +86,31 @@ def _same_layout(infos: list[tuple[int, dict[str, Any]]]) -> bool:
 
 def _merge_full(infos: list[tuple[int, dict[str, Any]]]) -> dict[str, Any]:
     """:func:`merge_infos` of infos that :func:`_same_layout` accepts: every key present in every slot, so every
-    mask is all True and no per-slot assignment is needed. The keys whose first value is a Python float (most of
-    them: reward terms, times, tensions) go into one array in one call, each key a row of it."""
+    mask is all True and no per-slot assignment is needed. The Python floats (most values: reward terms, times,
+    tensions), at the top level and in nested dicts of floats with the same keys in every slot, go into one array
+    in one call, each key a row of it; other nested dicts are merged recursively."""
     num_envs = len(infos)
     dicts = [info for _, info in infos]
     first = dicts[0]
     floats = [key for key, value in first.items() if type(value) is float]
-    rows = {}
-    if floats:
-        block = np.array([[d[key] for key in floats] for d in dicts], dtype=np.float64).T.copy()
-        rows = dict(zip(floats, block, strict=True))
+    nested = [key for key, value in first.items() if _float_dict(value) and _same_keys(dicts, key)]
+    rows: dict[str, Any] = {}
+    if floats or nested:
+        flat: list[float] = []
+        for d in dicts:  # one flat list to numpy (faster than a list of rows)
+            flat += [d[key] for key in floats]
+            for key in nested:
+                flat += d[key].values()
+        block = np.array(flat, dtype=np.float64).reshape(num_envs, -1).T.copy()
+        rows = dict(zip(floats, block, strict=False))
+        k = len(floats)
+        for key in nested:
+            subkeys = list(first[key])
+            masks = np.ones((len(subkeys), num_envs), dtype=np.bool_)
+            rows[key] = {}
+            for j, sub in enumerate(subkeys):
+                rows[key][sub], rows[key][f"_{sub}"] = block[k + j], masks[j]
+            k += len(subkeys)
     masks = np.ones((len(first), num_envs), dtype=np.bool_)
     out: dict[str, Any] = {}
     for k, (key, value) in enumerate(first.items()):
@@ -117,6 +132,17 @@ def _merge_full(infos: list[tuple[int, dict[str, Any]]]) -> dict[str, Any]:
             array = _object_items(infos, key)
         out[key], out[f"_{key}"] = array, masks[k]
     return out
+
+
+def _same_keys(dicts: list[dict[str, Any]], key: str) -> bool:
+    """Whether ``d[key]`` is a dict with the keys of the first one, in the same order, in every one of ``dicts``."""
+    keys = tuple(dicts[0][key])
+    return all(type(d[key]) is dict and tuple(d[key]) == keys for d in dicts)
+
+
+def _float_dict(value: Any) -> bool:
+    """Whether ``value`` is a non-empty dict of Python floats (merged into :func:`_merge_full`'s block)."""
+    return type(value) is dict and len(value) > 0 and all(type(v) is float for v in value.values())
 
 
 def _object_items(infos: list[tuple[int, dict[str, Any]]], key: str) -> np.ndarray:
