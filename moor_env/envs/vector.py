@@ -106,10 +106,10 @@ def _merge_full(infos: list[tuple[int, dict[str, Any]]]) -> dict[str, Any]:
         k = len(floats)
         for key in nested:
             subkeys = list(first[key])
-            masks = np.ones((len(subkeys), num_envs), dtype=np.bool_)
+            sub_masks = np.ones((len(subkeys), num_envs), dtype=np.bool_)
             rows[key] = {}
             for j, sub in enumerate(subkeys):
-                rows[key][sub], rows[key][f"_{sub}"] = block[k + j], masks[j]
+                rows[key][sub], rows[key][f"_{sub}"] = block[k + j], sub_masks[j]
             k += len(subkeys)
     masks = np.ones((len(first), num_envs), dtype=np.bool_)
     out: dict[str, Any] = {}
