@@ -10,7 +10,8 @@ Run from the repository root: ``python benchmarks/bench_drop.py``. One run does 
 3. a converged reference touchdown speed: ours with 0.25 m chain segments (vertical chain and loop), checked
    against 0.5 m; both codes' errors are relative to it.
 
-Writes ``benchmarks/results/bench_drop.json`` and prints one markdown line for the README. Absolute times are
+Writes ``benchmarks/results/bench_drop.json``, its table in ``docs/drop-speed.md`` and the README's headline line
+(``--docs-only``: only those, from the committed JSON). Absolute times are
 those of the machine the script runs on (named in the output); only the ratio carries over.
 """
 
@@ -28,6 +29,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from _docs import DOCS, load_result, run_line, table, write_blocks  # noqa: E402
 from _machine import machine  # noqa: E402
 
 from moor_env import load_scene, simulate_drop, solve_statics  # noqa: E402
@@ -38,9 +40,48 @@ REPEATS = 3
 REFERENCE = {"discretization.vertical_chain_segment_m": 0.25, "discretization.loop_chain_segment_m": 0.25}
 CHECK = {"discretization.vertical_chain_segment_m": 0.5, "discretization.loop_chain_segment_m": 0.5}
 RESULTS = ROOT / "benchmarks" / "results" / "bench_drop.json"
+DOC = DOCS / "drop-speed.md"
+README = ROOT / "README.md"
+COMMAND = "python benchmarks/bench_drop.py"
+
+
+def docs_blocks(out: dict) -> list[tuple[Path, str, str]]:
+    """The docs blocks of one run: the table (docs/drop-speed.md) and the README's headline line."""
+    ours, md, ref = out["ours"], out["moordyn"], out["reference"]
+    finer = md["at_0.7_dt"]
+    rows = [[f"ours, default (1 m chain, symplectic Euler, dt {1e3 * ours['dt_s']:.2f} ms)",
+             f"{ours['wall_dynamic_s_best_of_3']:.2f} s", f"{ours['touchdown_speed_m_s']:.2f} m/s",
+             f"{ours['tilt_deg']:.2f} deg", f"{100 * ours['error_vs_reference']:+.2f} %"],
+            [f"MoorDyn {out['moordyn_version']}, RK4 at 0.7 of its stability limit, same segments "
+             f"(dt {1e3 * md['dt_s']:.2f} ms)", f"{md['wall_s_best_of_3']:.2f} s",
+             f"{md['touchdown_speed_m_s']:.2f} m/s",
+             f"{md['tilt_deg']:.2f} deg", f"{100 * md['error_vs_reference']:+.2f} % "
+             f"({100 * finer['error_vs_reference']:+.2f} % at 0.7 of that step)"]]
+    text = "\n".join([
+        run_line({**out, "machine": out["measured_on"]}, COMMAND), "",
+        table([f"{out['scene']} fall, release to touchdown", "wall time (best of 3)", "touchdown speed", "tilt",
+               f"speed error vs converged reference ({ref['touchdown_speed_m_s']:.3f} m/s)"], rows), "",
+        f"MoorDyn/ours: {out['ratio_moordyn_over_ours']:.1f}x the wall time. The reference is ours with 0.25 m "
+        f"chain segments (dt {1e3 * ref['dt_s']:.3f} ms); at 0.5 m it differs by "
+        f"{100 * ref['check_minus_reference_relative']:+.2f} %."])
+    headline = (f"**Accuracy and speed of one fall** ({out['scene']}): {ours['touchdown_speed_m_s']:.2f} m/s at "
+                f"touchdown, {100 * ours['error_vs_reference']:+.2f} % against the converged reference, in "
+                f"{ours['wall_dynamic_s_best_of_3']:.2f} s; MoorDyn {out['moordyn_version']} on the same scene: "
+                f"{100 * md['error_vs_reference']:+.2f} % in {md['wall_s_best_of_3']:.2f} s "
+                f"({out['ratio_moordyn_over_ours']:.1f}x). `{COMMAND}`, run {out['date'][:10]}: "
+                "[docs/drop-speed.md](docs/drop-speed.md).")
+    return [(DOC, "bench_drop", text), (README, "headline-bench_drop", headline)]
+
+
+def docs_from_results() -> list[tuple[Path, str, str]]:
+    """:func:`docs_blocks` of the committed ``benchmarks/results/bench_drop.json``."""
+    return docs_blocks(load_result("bench_drop"))
 
 
 def main() -> dict:
+    if "--docs-only" in sys.argv[1:]:  # rewrite the docs tables from the committed JSON, run nothing
+        write_blocks(docs_from_results())
+        return load_result("bench_drop")
     from importlib.metadata import version
 
     import moordyn  # noqa: F401  (fail early when the oracle is missing)
@@ -119,6 +160,7 @@ def main() -> dict:
     }
     RESULTS.parent.mkdir(parents=True, exist_ok=True)
     RESULTS.write_text(json.dumps(out, indent=2) + "\n")
+    write_blocks(docs_blocks(out))
 
     line = (f"| {SCENE} fall to touchdown | ours {ours.wall_dynamic_s:.2f} s | MoorDyn {md['wall_s']:.2f} s | "
             f"MoorDyn/ours {out['ratio_moordyn_over_ours']:.1f}x | touchdown-speed error vs converged reference "

@@ -7,9 +7,9 @@ control steps, the pre-release phase integrated with ``control.pre_release_dt_s`
 geometry (gjoa-500:
 depth 500 m, spacing 0.1 h, line 1.08 h, no current) with the sea state drawn from the config (Hs 0-3 m, so
 most resets simulate the 20 s wave warm-up). The policy holds the vessels for 59 steps and releases on the 60th,
-so one episode is 59 s of pre-release control plus the fall to touchdown (the issue's "60 s pre-release plus the
-fall"), after the reset's warm-up. The equilibrium is solved before timing starts (it is cached). With waves the
-env runs the `fast` preset's tight_line resolution with its ``in_waves`` keys (1 m loop chain) throughout. A second
+so one episode is 59 s of pre-release control plus the fall to touchdown, after the reset's warm-up. The
+equilibrium is solved before timing starts (it is cached). With waves the env runs the `fast` preset's
+tight_line resolution with its ``in_waves`` keys (1 m loop chain) throughout. A second
 variant (``calm default scene``) keeps the bundled gjoa-500 scene as it is, without waves (Hs 0, no warm-up): its
 slack loop hangs and falls on the coarse resolution. A third runs the pre-release phase at the scene's own step
 (``control.pre_release_dt_s`` and ``pre_release_dt_calm_s`` null) for comparison.
@@ -20,7 +20,8 @@ Every row runs ``--repeats`` times, round robin, and the table shows each row's 
 the JSON): on this shared machine one row's rate moves by tens of percent between minutes. The batched over
 async ratio is given both ways: best median row over best median row, and within each round (rows a minute
 apart, so both see the same minute of the machine), with the spread of the rounds.
-Writes ``benchmarks/results/bench_env.json`` and prints a markdown table for the README. The machine is shared;
+Writes ``benchmarks/results/bench_env.json``, its table in ``docs/env-speed.md`` and the README's headline line
+(``--docs-only``: only those, from the committed JSON). The machine is shared;
 the 1-minute load average before and after is recorded with the results.
 """
 
@@ -41,6 +42,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import gymnasium as gym  # noqa: E402
+from _docs import DOCS, load_result, run_line, table, write_blocks  # noqa: E402
 from _machine import run_record  # noqa: E402
 
 import moor_env  # noqa: E402, F401 - registers the envs
@@ -178,6 +180,64 @@ def round_ratios(rounds: list[list[dict]], labels: list[str]) -> dict[str, dict[
     return out
 
 
+DOC = DOCS / "env-speed.md"
+README = ROOT / "README.md"
+COMMAND = "python benchmarks/bench_env.py"
+
+
+def env_table(rows: list[dict]) -> str:
+    """The rows (each one's median round) as a markdown table."""
+    out = []
+    for r in rows:
+        share = f"{r['kernel_share_of_cpu']:.0%}" if "kernel_share_of_cpu" in r else "-"
+        procs = f"{r['workers']} procs" if "workers" in r else r.get("threads", r["cores"])
+        out.append([r["variant"], r["env"], r["num_envs"], procs, f"{r['transitions_per_s']:.1f}",
+                    f"{r['episodes_per_s']:.3f}", f"{r['episodes_per_s_per_core']:.3f}",
+                    f"{r['cpu_s_per_episode']:.3f}", f"{r['cpu_ms_per_transition']:.3f}", share])
+    return table(["variant", "env", "envs", "threads/procs", "transitions/s", "episodes/s", "episodes/s/core",
+                  "CPU s/episode", "CPU ms/transition", "kernel share"], out)
+
+
+def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
+    """The docs blocks of one run: the table with the batched/async ratios (docs/env-speed.md) and the README's
+    headline line."""
+    rows = result["rows"]
+    labels = list(result["batched_over_async_transitions"])
+    within = result.get("batched_over_async_within_rounds") or round_ratios(result["rounds"], labels)
+    lines = [run_line(result, COMMAND) + f" {len(result['rounds'])} rounds of every row, round robin; the table "
+             "shows each row's median round.", "", env_table(rows), ""]
+    for label in labels:
+        ratio = result["batched_over_async_transitions"][label]
+        b = result["batched_over_async_bound_from_kernel_cost"][label]
+        w = within[label]
+        lines.append(f"- {label}: best batched over best async row, transitions per second, {ratio:.2f}x "
+                     f"(within each round: {', '.join(f'{x:.2f}' for x in w['per_round'])}); bound with free "
+                     f"Python and IPC (async CPU per transition over the single env's kernel CPU per transition): "
+                     f"{b['async_cpu_ms_per_transition']:.3f} / {b['single_kernel_ms_per_transition']:.3f} ms = "
+                     f"{b['batched_over_async_upper_bound']:.2f}x.")
+    single = {r["variant"]: r for r in rows if r["env"] == "single"}
+    calm, waves = single.get("calm default scene"), single.get("default config")
+    ratios = result["batched_over_async_transitions"]
+    parts = []
+    if calm is not None:
+        parts.append(f"{1e3 * calm['cpu_s_per_episode']:.0f} ms CPU per episode on the calm default scene")
+    if waves is not None:
+        parts.append(f"{1e3 * waves['cpu_s_per_episode']:.0f} ms with the config's waves")
+    best = max((r for r in rows if r["variant"] == "calm default scene"), key=lambda r: r["transitions_per_s"],
+               default=None)
+    headline = ("**Env speed** (single env, 60 s of control plus the fall): " + ", ".join(parts) + ". ")
+    if best is not None:
+        headline += (f"The batched vector env steps {best['transitions_per_s']:.0f} transitions/s calm, "
+                     f"{ratios['calm default scene']:.2f}x the async one ({ratios['default config']:.2f}x in waves). ")
+    headline += f"`{COMMAND}`, run {result['date'][:10]}: [docs/env-speed.md](docs/env-speed.md)."
+    return [(DOC, "bench_env", "\n".join(lines)), (README, "headline-bench_env", headline)]
+
+
+def docs_from_results() -> list[tuple[Path, str, str]]:
+    """:func:`docs_blocks` of the committed ``benchmarks/results/bench_env.json``."""
+    return docs_blocks(load_result("bench_env"))
+
+
 def main(argv: list[str] | None = None) -> dict:
     """Run every configuration, write the JSON and print the table."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -187,7 +247,12 @@ def main(argv: list[str] | None = None) -> dict:
                         help="rounds of every row (round robin); the table shows each row's median round")
     parser.add_argument("--no-compare", action="store_true",
                         help="only the default config (no calm scene, no pre-release at the scene's step)")
+    parser.add_argument("--docs-only", action="store_true",
+                        help="rewrite the docs tables from benchmarks/results/bench_env.json, run nothing")
     args = parser.parse_args(argv)
+    if args.docs_only:
+        write_blocks(docs_from_results())
+        return load_result("bench_env")
     episodes = 1 if args.quick else args.episodes
     load_before = os.getloadavg()[0]
     variants = [("default config", OVERRIDES)]
@@ -243,6 +308,7 @@ def main(argv: list[str] | None = None) -> dict:
     }
     RESULTS.parent.mkdir(parents=True, exist_ok=True)
     RESULTS.write_text(json.dumps(result, indent=2))
+    write_blocks(docs_blocks(result))
     print(f"\nwritten {RESULTS.relative_to(ROOT)}; {result['machine']}; load {load_before:.2f} -> "
           f"{result['load_average_1min']['after']:.2f}\n")
     print("| variant | env | envs | threads/procs | transitions/s | episodes/s | episodes/s/core | CPU s/episode | "

@@ -1,7 +1,8 @@
 """Benchmark: cost per step of the implicit Euler line integrator (``moor_env/physics/implicit.py``).
 
 Run from the repository root: ``python benchmarks/bench_implicit_step.py [--repeats 5] [--rounds 3]
-[--no-breakdown] [--baseline-root DIR]``. Writes ``benchmarks/results/bench_implicit_step.json``.
+[--no-breakdown] [--baseline-root DIR]``. Writes ``benchmarks/results/bench_implicit_step.json`` and its tables in
+``docs/implicit-step.md`` (``--docs-only``: only the tables, from the committed JSON).
 
 ``--baseline-root DIR`` times another copy of the package as well (a directory holding ``moor_env`` and
 ``configs``, e.g. ``mkdir /tmp/old && git archive HEAD moor_env configs | tar -x -C /tmp/old``), in a subprocess
@@ -49,6 +50,7 @@ ROOT = Path(__file__).resolve().parent.parent
 TREE = Path(sys.argv[sys.argv.index("--root") + 1]).resolve() if "--root" in sys.argv else ROOT
 sys.path.insert(0, str(TREE))
 
+from _docs import DOCS, load_result, run_line, table, write_blocks  # noqa: E402
 from _machine import run_record  # noqa: E402
 
 from moor_env import load_scene, solve_statics  # noqa: E402
@@ -306,6 +308,52 @@ def compare(current: dict, baseline: list[dict]) -> dict:
     return out
 
 
+DOC = DOCS / "implicit-step.md"
+COMMAND = "python benchmarks/bench_implicit_step.py"
+PIECES = (("loads_us", "loads"), ("order_rebuild_us", "order rebuild"), ("assemble_us", "assembly"),
+          ("eliminate_back_substitute_us", "elimination and back substitution"),
+          ("update_active_set_us", "active-set update"))
+
+
+def docs_blocks(out: dict) -> list[tuple[Path, str, str]]:
+    """The tables of one run (docs/implicit-step.md): cost per step by case (with the baseline's ratio where the run
+    had one), and the breakdown of one step."""
+    cases = out["cases"]
+    against = out.get("against_baseline") or {}
+    header = ["case", "dt [ms]", "steps", "us/step min", "us/step median", "active-set solves per step mean / max"]
+    if against:
+        header += ["ratio to baseline", "same state bits"]
+    rows = []
+    for name, r in cases.items():
+        solves = r.get("active_set_solves")
+        row = [name, f"{1e3 * r['dt_s']:.2f}", r["steps"], f"{r['us_per_step_min']:.2f}",
+               f"{r['us_per_step_median']:.2f}",
+               f"{solves['mean_solves']:.2f} / {solves['max_solves']}" if solves else "-"]
+        if against:
+            c = against.get(name)
+            row += [f"{c['ratio']:.3f}", "yes" if c["same_state_bits"] else "no"] if c else ["-", "-"]
+        rows.append(row)
+    text = [run_line(out, COMMAND) + f" {out['rounds']} rounds x {out['repeats']} timed runs of every case.", "",
+            table(header, rows)]
+    if against:
+        label = out.get("baseline", {}).get("label")
+        text += ["", "The baseline is another tree timed alternately with this one" + (f" ({label})" if label else "")
+                 + "; the ratio is this tree's best time per step over the baseline's."]
+    pieces = [[name] + [f"{r['pieces_us'][k]:.2f}" for k, _ in PIECES] +
+              [f"{r['pieces_us']['n_active_segments']} of {r['pieces_us']['n_segment_slots']}"]
+              for name, r in cases.items() if "pieces_us" in r]
+    blocks = [(DOC, "bench_implicit_step", "\n".join(text))]
+    if pieces:
+        blocks.append((DOC, "bench_implicit_step:pieces", table(
+            ["case"] + [f"{label} [us]" for _, label in PIECES] + ["active segments"], pieces)))
+    return blocks
+
+
+def docs_from_results() -> list[tuple[Path, str, str]]:
+    """:func:`docs_blocks` of the committed ``benchmarks/results/bench_implicit_step.json``."""
+    return docs_blocks(load_result("bench_implicit_step"))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5, help="timed runs of every case per round")
@@ -315,7 +363,12 @@ def main() -> None:
     parser.add_argument("--baseline-label", default="", help="what the baseline tree is (kept in the JSON)")
     parser.add_argument("--root", type=Path, help="run on another tree (used for the baseline)")
     parser.add_argument("--out", type=Path, default=RESULTS)
+    parser.add_argument("--docs-only", action="store_true",
+                        help="rewrite the docs tables from benchmarks/results/bench_implicit_step.json, run nothing")
     args = parser.parse_args()
+    if args.docs_only:
+        write_blocks(docs_from_results())
+        return
     load_before = os.getloadavg()[0]
     cases = [Case("hanging_waves", WAVES, fall=False), Case("fall_fast", COARSE, fall=True),
              Case("fall_fine", FINE, fall=True), Case("fall_fast_after_waves", WAVES, fall=True, hang_first=True)]
@@ -352,6 +405,8 @@ def main() -> None:
             args.out.with_name(args.out.stem + f"_baseline_{k}.json").unlink()
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(out, indent=2) + "\n")
+    if args.root is None and args.out.resolve() == RESULTS.resolve():
+        write_blocks(docs_blocks(out))
     for name, r in results.items():
         line = f"{name:22s} dt {r['dt_s'] * 1e3:6.2f} ms  {r['steps']:5d} steps  {r['us_per_step_min']:6.2f} us/step " \
                f"(median {r['us_per_step_median']:6.2f})  {r['outputs']}"

@@ -11,14 +11,16 @@ policy also releases on about half of the steps, so episodes are comparably shor
 
 Every new discrete scenario combination first solves its hanging equilibrium (a one-off cost, cached on disk,
 seconds to minutes each on a loaded machine), so a throughput figure should fix the equilibrium fields with
-``--set env.overrides.scenario.<field>=<value>`` (the README's figure does) or precompute the grid
+``--set env.overrides.scenario.<field>=<value>`` (the docs' figure does) or precompute the grid
 (``python -m moor_env.envs.precompute``). Writes ``benchmarks/results/bench_rllib.json`` with the machine, the
-load averages and the versions.
+load averages and the versions, and the table in ``docs/rllib.md`` from ``bench_rllib*.json`` (``--docs-only``:
+only the table, from the committed JSON).
 """
 
 from __future__ import annotations
 
 import argparse
+import datetime
 import json
 import os
 import platform
@@ -31,6 +33,9 @@ import gymnasium as gym
 from tqdm import tqdm
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _docs import DOCS, RESULTS, load_result, table, write_blocks  # noqa: E402
 
 import moor_env  # noqa: E402, F401 - registers the envs
 from agents.config import parse_set  # noqa: E402
@@ -102,6 +107,39 @@ def rllib_run(config: str, overrides: dict, runners: int, batch: int, iterations
             "loadavg_after": os.getloadavg(), "rows": rows}
 
 
+DOC = DOCS / "rllib.md"
+STEMS = ("bench_rllib", "bench_rllib_envs4")
+
+
+def docs_blocks(results: dict[str, dict]) -> list[tuple[Path, str, str]]:
+    """The throughput table (docs/rllib.md) from the runs ``results`` (JSON name -> result)."""
+    plain = [r["plain_loop"] for r in results.values()]
+    steps = [p["env_steps_per_s"] for p in plain]
+    eps = [p["episodes_per_s"] for p in plain]
+    rows = [["plain loop, one process, random actions (same windows)", f"{min(steps):.0f}-{max(steps):.0f}",
+             f"{min(eps):.0f}-{max(eps):.0f}"]]
+    notes = []
+    for stem, result in results.items():
+        per_runner = result["overrides"].get("env_runners.num_envs_per_env_runner")
+        for r in result["rllib"]:
+            setup = f"RLlib PPO, {r['env_runners']} env runner{'s' if r['env_runners'] > 1 else ''}" + \
+                (f" x {per_runner} envs" if per_runner else "")
+            rows.append([setup, f"{r['env_steps_per_s']:.0f}", f"{r['episodes_per_s']:.0f}"])
+        m = result["machine"]
+        load = result["loadavg_start"][0]
+        notes.append(f"`benchmarks/results/{stem}.json`" + (f" (run {result['date'][:10]})" if "date" in result else "")
+                     + f": {m['cpu']}, {m['cpu_count']} logical cores, 1-min load average {load:.1f} at the start, "
+                     f"PPO batches of {result['batch']} env steps")
+    return [(DOC, "bench_rllib", table(["setup", "env steps/s", "episodes/s"], rows) + "\n\n" +
+             "; ".join(notes) + ".")]
+
+
+def docs_from_results() -> list[tuple[Path, str, str]]:
+    """:func:`docs_blocks` of the committed ``benchmarks/results/bench_rllib*.json``."""
+    results = {stem: load_result(stem) for stem in STEMS}
+    return docs_blocks({stem: r for stem, r in results.items() if r is not None})
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the plain loop and the RLlib runs; write the JSON."""
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -113,11 +151,17 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="RLlib config override (also the plain loop's env): env.overrides.scenario.current_scale=0")
     p.add_argument("--out", default=str(OUT))
+    p.add_argument("--docs-only", action="store_true",
+                   help="rewrite the docs table from benchmarks/results/bench_rllib*.json, run nothing")
     args = p.parse_args(argv)
+    if args.docs_only:
+        write_blocks(docs_from_results())
+        return 0
     overrides = parse_set(args.set)
     cfg = load_rllib_config(args.config, overrides)
     env_cfg = load_env_config(cfg.env.config, cfg.env.overrides)
-    result = {"machine": {"host": platform.node(), "cpu": cpu_model(), "cpu_count": os.cpu_count(),
+    result = {"date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+              "machine": {"host": platform.node(), "cpu": cpu_model(), "cpu_count": os.cpu_count(),
                           "python": platform.python_version()},
               "config": args.config, "overrides": overrides, "env_id": cfg.env.id, "env_config": env_cfg.name,
               "batch": args.batch,
@@ -130,6 +174,8 @@ def main(argv: list[str] | None = None) -> int:
     for r in result["rllib"]:
         r["ratio_to_plain_loop"] = r["env_steps_per_s"] / plain
     write_json_atomic(args.out, result)
+    if Path(args.out).resolve().parent == RESULTS.resolve() and Path(args.out).stem in STEMS:
+        write_blocks(docs_from_results())
     print(f"plain loop: {plain:.1f} env steps/s, {result['plain_loop']['episodes_per_s']:.2f} episodes/s")
     for r in result["rllib"]:
         print(f"rllib {r['env_runners']} runner(s): {r['env_steps_per_s']:.1f} env steps/s, "

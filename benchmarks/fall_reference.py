@@ -2,7 +2,8 @@
 outcomes on which the integrators disagree.
 
 Run from the repository root: ``python benchmarks/fall_reference.py [--episodes 72] [--calm] [--trace-seed 1002]``.
-Writes ``benchmarks/results/fall_reference.json`` (``fall_reference_calm.json`` with ``--calm``) and the figure
+Writes ``benchmarks/results/fall_reference.json`` (``fall_reference_calm.json`` with ``--calm``), its tables in
+``docs/fall-accuracy.md`` (``--docs-only``: only the tables, from the committed JSON) and the figure
 ``docs/fall-snap.png``.
 
 Each episode draws its scenario from the default config (seeds 1000, 1001, ...; with waves unless ``--calm``) and
@@ -48,6 +49,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+from _docs import DOCS, load_result, run_line, table, write_blocks  # noqa: E402
 from _machine import run_record, write_results  # noqa: E402
 from fall_step import EXPLICIT_FALL, scale_fall_step  # noqa: E402
 from pre_release_step import run_episode  # noqa: E402
@@ -167,13 +169,66 @@ def plot_traces(traces: dict[str, dict], seed: int, path: Path) -> None:
     print(f"written {path}")
 
 
+DOC = DOCS / "fall-accuracy.md"
+
+
+def docs_blocks(result: dict, stem: str) -> list[tuple[Path, str, str]]:
+    """The tables of one run (``stem``: ``fall_reference`` or ``fall_reference_calm``) in docs/fall-accuracy.md:
+    all episodes, and split by where the reference's chain ends."""
+    rows = []
+    for name, s in result["summary"].items():
+        speed, tilt = s["dspeed_m_s"], s["dtilt_deg"]
+        n = s["episodes"] + s["failures"]
+        if name == "reference":
+            diffs = ["-", "-", "-"]
+        else:
+            diffs = [f"{speed['median']:.3f} / {speed['p90']:.3f}", f"{speed['signed_mean']:+.3f}",
+                     f"{tilt['median']:.2f} / {tilt['p90']:.2f}"]
+        rows.append([name, *diffs, f"{s['fast_and_vertical']} of {n}",
+                     f"{s['chain_past_back_end_at_touchdown']} of {n}", f"{s['cpu_s_median']:.3f}"])
+    command = "python benchmarks/fall_reference.py" + (" --calm" if stem.endswith("_calm") else "")
+    text = [run_line(result, command) + f" Reference: {result['reference']}; fast and vertical: "
+            f"{result['fast_and_vertical']}.", "",
+            table(["case", "speed diff median / p90 [m/s]", "signed mean [m/s]", "tilt diff median / p90 [deg]",
+                   "fast and vertical", "chain inside", "CPU s/episode"], rows)]
+    split_rows = []
+    for part in ("behind", "through"):
+        split = result.get(f"summary_reference_chain_{part}_anchor")
+        if split is None:
+            continue
+        for name, s in split.items():
+            if name in ("seeds", "reference"):
+                continue
+            speed, tilt = s["dspeed_m_s"], s["dtilt_deg"]
+            split_rows.append([f"{part} ({len(split['seeds'])})", name, f"{speed['median']:.3f} / {speed['p90']:.3f}",
+                               f"{speed['signed_mean']:+.3f}", f"{tilt['median']:.2f} / {tilt['p90']:.2f}"])
+    split_text = table(["reference chain ends (episodes)", "case", "speed diff median / p90 [m/s]",
+                        "signed mean [m/s]", "tilt diff median / p90 [deg]"], split_rows)
+    return [(DOC, stem, "\n".join(text)), (DOC, f"{stem}:split", split_text)]
+
+
+def docs_from_results() -> list[tuple[Path, str, str]]:
+    """:func:`docs_blocks` of the committed ``benchmarks/results/fall_reference[_calm].json``."""
+    out = []
+    for stem in ("fall_reference", "fall_reference_calm"):
+        result = load_result(stem)
+        if result is not None:
+            out += docs_blocks(result, stem)
+    return out
+
+
 def main(argv: list[str] | None = None) -> dict:
     """Run every case on every episode and the trace; write the JSON and the figure, print a table."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--episodes", type=int, default=72)
     parser.add_argument("--calm", action="store_true", help="no waves (Hs 0); writes fall_reference_calm.json")
     parser.add_argument("--trace-seed", type=int, default=1002, help="episode whose fall is traced (-1: none)")
+    parser.add_argument("--docs-only", action="store_true",
+                        help="rewrite the docs tables from benchmarks/results/fall_reference*.json, run nothing")
     args = parser.parse_args(argv)
+    if args.docs_only:
+        write_blocks(docs_from_results())
+        return {}
     load_before = os.getloadavg()[0]
     sea = {"scenario.sea_state_hs_m": 0.0} if args.calm else {}
     envs = {name: make_case_env({**sea, **ov}, pre, fall) for name, ov, pre, fall, _ in CASES}
@@ -209,6 +264,7 @@ def main(argv: list[str] | None = None) -> dict:
         if not args.calm:
             plot_traces(traces, args.trace_seed, FIGURE)
     write_results(RESULTS.with_name("fall_reference" + ("_calm" if args.calm else "") + ".json"), result)
+    write_blocks(docs_blocks(result, "fall_reference" + ("_calm" if args.calm else "")))
     print("| case | episodes | failures | speed diff median / p90 [m/s] | signed mean [m/s] | tilt diff median / p90 "
           "[deg] | fast and vertical | chain past the back end at touchdown (episodes, median m) | CPU s/episode |")
     print("|---|---|---|---|---|---|---|---|---|")

@@ -2,7 +2,8 @@
 
 Run from the repository root: ``python benchmarks/fall_step.py [--episodes 12] [--factors 2 1 0.5 0.25]
 [--calm] [--explicit-reference]``. Writes ``benchmarks/results/fall_step.json`` (``fall_step_calm.json`` with
-``--calm``; ``fall_step_explicit[_calm].json`` with ``--explicit-reference``).
+``--calm``; ``fall_step_explicit[_calm].json`` with ``--explicit-reference``) and its table in
+``docs/fall-accuracy.md`` (``--docs-only``: only the tables, from the committed JSON).
 
 Each episode draws its scenario from the default config (seeds 1000, 1001, ...; ``--calm``: Hs 0) and is driven
 by the seeded random controls of ``benchmarks/pre_release_step.py`` (spacing and winch rates redrawn every 10 s,
@@ -14,7 +15,7 @@ reference, or with ``--explicit-reference`` the same fall integrated by symplect
 stability limit (``fidelity.discretization.fall_integrator: symplectic_euler``: the integrator of the validated
 ``default`` fidelity; about 0.17 ms on the 0.5 m loop chain, 0.34 ms on 1 m). Compared: touchdown speed and
 tilt, over all episodes and over those whose reference chain ends behind the anchor's back end (the others' chain
-has fallen into the anchor, which the model has no contact to stop: README "Accuracy of the fall"). Two
+has fallen into the anchor, which the model has no contact to stop: ``docs/fall-accuracy.md``). Two
 neighbouring factors that agree with each other and not with the coarser ones show the step the fall converges
 at.
 """
@@ -34,6 +35,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import gymnasium as gym  # noqa: E402
+from _docs import DOCS, load_result, run_line, table, write_blocks  # noqa: E402
 from _machine import run_record, write_results  # noqa: E402
 from pre_release_step import ENV_ID, run_episode  # noqa: E402
 
@@ -72,6 +74,46 @@ def _summary(rows: list[dict], factor: float, seeds: set[int] | None = None) -> 
                           "max": float(tilt.max())}}
 
 
+DOC = DOCS / "fall-accuracy.md"
+STEMS = ("fall_step_explicit", "fall_step_explicit_calm", "fall_step", "fall_step_calm")
+
+
+def _factor_rows(summary: dict) -> list[list]:
+    return [[name, s["episodes"], f"{1e3 * s['fall_dt_s_median']:.2f}",
+             f"{s['dspeed_m_s']['median']:.3f} / {s['dspeed_m_s']['p90']:.2f} / {s['dspeed_m_s']['max']:.2f}",
+             f"{s['dtilt_deg']['median']:.2f} / {s['dtilt_deg']['p90']:.2f} / {s['dtilt_deg']['max']:.2f}",
+             f"{s['cpu_s_median']:.3f}"] for name, s in summary.items()]
+
+
+def docs_blocks(result: dict, stem: str) -> list[tuple[Path, str, str]]:
+    """The table of one run (``stem``: its JSON's name, see ``STEMS``) in docs/fall-accuracy.md; with the split
+    by where the reference's chain ends where the run has it."""
+    flags = (" --explicit-reference --factors 2 1 0.5 0.25 0.125" if "_explicit" in stem else "") + \
+        (" --calm" if stem.endswith("_calm") else "")
+    header = ["fall step", "episodes", "step [ms]", "touchdown speed diff median / p90 / max [m/s]",
+              "tilt diff median / p90 / max [deg]", "CPU s/episode (median)"]
+    reference = result.get("reference", f"{result['reference_factor']:g}x the scene's step")
+    lines = [run_line(result, "python benchmarks/fall_step.py" + flags) + f" Reference: {reference}.", "",
+             table(header, _factor_rows(result["summary_abs_differences_to_reference"]))]
+    behind = result.get("summary_reference_chain_behind_anchor")
+    if behind:
+        through = result.get("reference_chain_through_anchor_seeds", [])
+        lines += ["", f"The episodes whose reference chain ends behind the anchor's back end "
+                      f"({next(iter(behind.values()))['episodes']}; through it: {len(through)}):", "",
+                  table(header, _factor_rows(behind))]
+    return [(DOC, stem, "\n".join(lines))]
+
+
+def docs_from_results() -> list[tuple[Path, str, str]]:
+    """:func:`docs_blocks` of the committed ``benchmarks/results/fall_step*.json``."""
+    out = []
+    for stem in STEMS:
+        result = load_result(stem)
+        if result is not None:
+            out += docs_blocks(result, stem)
+    return out
+
+
 def main(argv: list[str] | None = None) -> dict:
     """Run every factor on every episode, write the JSON and print a table."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -82,7 +124,12 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--explicit-reference", action="store_true",
                         help="the reference is the fall integrated explicitly (symplectic Euler at its stability "
                              "limit) instead of the finest factor; writes fall_step_explicit[_calm].json")
+    parser.add_argument("--docs-only", action="store_true",
+                        help="rewrite the docs tables from benchmarks/results/fall_step*.json, run nothing")
     args = parser.parse_args(argv)
+    if args.docs_only:
+        write_blocks(docs_from_results())
+        return {}
     load_before = os.getloadavg()[0]
     factors = sorted(set(args.factors))
     if args.explicit_reference:
@@ -109,7 +156,7 @@ def main(argv: list[str] | None = None) -> dict:
         rows += episode
     summary = {f"{factor:g}x": _summary(rows, factor) for factor in factors[1:]}
     # split by where the reference's vertical chain ends at touchdown: past the anchor's back end (fallen into the
-    # body, which the model has no contact to stop; README "Accuracy of the fall") or behind it
+    # body, which the model has no contact to stop; docs/fall-accuracy.md) or behind it
     ref_rows = [r for r in rows if r["factor"] == factors[0] and r.get("chain_past_back_end_m") is not None]
     behind = {r["seed"] for r in ref_rows if r["chain_past_back_end_m"] <= 0.0}
     through = {r["seed"] for r in ref_rows} - behind
@@ -124,6 +171,7 @@ def main(argv: list[str] | None = None) -> dict:
                                                         for factor in factors[1:]} if behind else None,
               "rows": rows}
     write_results(RESULTS.with_name(name + ".json"), result)
+    write_blocks(docs_blocks(result, name))
     print(f"reference: {result['reference']}")
     print("| fall step | episodes | step [ms] | touchdown speed diff median / p90 / max [m/s] | "
           "tilt diff median / p90 / max [deg] | CPU s/episode (median) |")

@@ -2,7 +2,8 @@
 AnchorRelease-v0.
 
 Run from the repository root: ``python benchmarks/pre_release_step.py [--calm] [--episodes 12] [--steps 0.1 0.2]``.
-Writes ``benchmarks/results/pre_release_step.json``.
+Writes ``benchmarks/results/pre_release_step.json`` (``pre_release_step_calm.json`` with ``--calm``) and its table in
+``docs/pre-release-step.md`` (``--docs-only``: only the tables, from the committed JSON).
 
 Each episode draws its scenario from the default config (``configs/envs/anchor-release.yaml``, seeds 1000, 1001,
 ...) and is driven by seeded random controls (spacing and winch rates redrawn every 10 s, release at a random
@@ -28,6 +29,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import gymnasium as gym  # noqa: E402
+from _docs import DOCS, load_result, run_line, table, write_blocks  # noqa: E402
 from _machine import run_record, write_results  # noqa: E402
 
 import moor_env  # noqa: E402, F401 - registers the envs
@@ -108,6 +110,36 @@ def _summary(rows: list[dict], case: str) -> dict:
     return out
 
 
+DOC = DOCS / "pre-release-step.md"
+
+
+def docs_blocks(result: dict, stem: str) -> list[tuple[Path, str, str]]:
+    """The table of one run (``stem``: its JSON's name, ``pre_release_step`` or ``pre_release_step_calm``) in
+    docs/pre-release-step.md."""
+    rows = []
+    for name, s in result["summary_abs_differences_to_reference"].items():
+        rows.append([name, s["episodes"], s["failures"],
+                     f"{s['dspeed_m_s']['median']:.3f} / {s['dspeed_m_s']['max']:.2f}",
+                     f"{s['dtilt_deg']['median']:.2f} / {s['dtilt_deg']['max']:.2f}",
+                     f"{s['release_dvz_m_s']['median']:.3f} / {s['release_dvz_m_s']['max']:.3f}", s["fallbacks"],
+                     f"{s['cpu_s_median']:.3f}"])
+    command = "python benchmarks/pre_release_step.py" + (" --calm" if stem.endswith("_calm") else "")
+    text = "\n".join([run_line(result, command), "", table(
+        ["case", "compared", "failures", "touchdown speed diff median / max [m/s]", "tilt diff median / max [deg]",
+         "anchor heave velocity diff at release median / max [m/s]", "fallbacks", "CPU s/episode (median)"], rows)])
+    return [(DOC, stem, text)]
+
+
+def docs_from_results() -> list[tuple[Path, str, str]]:
+    """:func:`docs_blocks` of the committed ``benchmarks/results/pre_release_step[_calm].json``."""
+    out = []
+    for stem in ("pre_release_step", "pre_release_step_calm"):
+        result = load_result(stem)
+        if result is not None:
+            out += docs_blocks(result, stem)
+    return out
+
+
 def main(argv: list[str] | None = None) -> dict:
     """Run every case on every episode, write the JSON and print a table."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -116,7 +148,12 @@ def main(argv: list[str] | None = None) -> dict:
                         help="pre-release steps [s] (default 0.1 0.2 0.25 0.5; with --calm 0.1 0.25 0.5)")
     parser.add_argument("--calm", action="store_true",
                         help="no waves (Hs 0 in every scenario); writes pre_release_step_calm.json")
+    parser.add_argument("--docs-only", action="store_true",
+                        help="rewrite the docs tables from benchmarks/results/pre_release_step*.json, run nothing")
     args = parser.parse_args(argv)
+    if args.docs_only:
+        write_blocks(docs_from_results())
+        return {}
     if args.steps is None:
         args.steps = [0.1, 0.25, 0.5] if args.calm else [0.1, 0.2, 0.25, 0.5]
     sea = {"scenario.sea_state_hs_m": 0.0} if args.calm else {}
@@ -150,6 +187,7 @@ def main(argv: list[str] | None = None) -> dict:
         "rows": rows,
     }
     write_results(results, result)
+    write_blocks(docs_blocks(result, results.stem))
     print("| case | compared | failures | touchdown speed diff median / max [m/s] | tilt diff median / max [deg] | "
           "release vz diff median / max [m/s] | fallbacks | CPU s/episode (median) |")
     print("|---|---|---|---|---|---|---|---|")

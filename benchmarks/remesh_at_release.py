@@ -1,7 +1,8 @@
 """Accuracy and cost of the envs' resolution choices around the release (``moor_env.remesh``, AnchorRelease-v0).
 
 Run from the repository root: ``python benchmarks/remesh_at_release.py [--episodes 12]``. Writes
-``benchmarks/results/remesh_at_release.json`` and prints markdown tables.
+``benchmarks/results/remesh_at_release.json``, its tables in ``docs/remesh-at-release.md`` (``--docs-only``: only
+the tables, from the committed JSON) and prints them.
 
 A calm scenario whose loop starts slack runs the pre-release phase on the env's fidelity preset's own
 resolution (``fast``: 2 m chain, 20 m fibre, 30 m wire) and, at the release, moves the state onto the preset's
@@ -48,6 +49,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import gymnasium as gym  # noqa: E402
+from _docs import DOCS, load_result, run_line, table, write_blocks  # noqa: E402
 from _machine import run_record, write_results  # noqa: E402
 from pre_release_step import ReferenceVariants, run_episode  # noqa: E402
 
@@ -131,11 +133,51 @@ def _summary(rows: list[dict]) -> dict:
     return out
 
 
+DOC = DOCS / "remesh-at-release.md"
+COMMAND = "python benchmarks/remesh_at_release.py"
+
+
+def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
+    """The two tables of one run (docs/remesh-at-release.md): the cases, and the waves check."""
+    rows = []
+    for label, s in result["summary_abs_differences_to_each_parts_reference"].items():
+        head = [label, f"{s['tight_falls']}/{s['episodes']}", s["failures"]]
+        if label in ("calm: fine throughout", "waves: default"):
+            rows.append(head + ["reference", "reference", f"{s['cpu_s_median']:.3f}"])
+            continue
+        d, t = s["dspeed_m_s"], s["dtilt_deg"]
+        rows.append(head + [f"{d['median']:.3f} / {d['p90']:.3f} / {d['max']:.3f}",
+                            f"{t['median']:.2f} / {t['p90']:.2f} / {t['max']:.2f}", f"{s['cpu_s_median']:.3f}"])
+    cases = "\n".join([run_line(result, COMMAND), "", table(
+        ["case", "falls on tight_line", "failures", "touchdown speed diff median / p90 / max [m/s]",
+         "tilt diff median / p90 / max [deg]", "CPU s/episode (median)"], rows)])
+    waves = result["waves_check"]
+    hs_values = sorted({r["hs_m"] for r in waves})
+    check = []
+    for hs in hs_values:
+        d = np.abs([r["dspeed_m_s"] for r in waves if r["hs_m"] == hs])
+        t = np.abs([r["dtilt_deg"] for r in waves if r["hs_m"] == hs])
+        check.append([f"{hs:g}", d.size, f"{np.median(d):.3f} / {d.max():.3f}", f"{np.median(t):.2f} / {t.max():.2f}"])
+    check_text = table(["Hs [m]", "seeds", "touchdown speed diff, median abs / max abs [m/s]",
+                        "tilt diff, median abs / max abs [deg]"], check)
+    return [(DOC, "remesh_at_release", cases), (DOC, "remesh_at_release:waves_check", check_text)]
+
+
+def docs_from_results() -> list[tuple[Path, str, str]]:
+    """:func:`docs_blocks` of the committed ``benchmarks/results/remesh_at_release.json``."""
+    return docs_blocks(load_result("remesh_at_release"))
+
+
 def main(argv: list[str] | None = None) -> dict:
     """Run every case on every episode, write the JSON and print the tables."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--episodes", type=int, default=12)
+    parser.add_argument("--docs-only", action="store_true",
+                        help="rewrite the docs tables from benchmarks/results/remesh_at_release.json, run nothing")
     args = parser.parse_args(argv)
+    if args.docs_only:
+        write_blocks(docs_from_results())
+        return load_result("remesh_at_release")
     load_before = os.getloadavg()[0]
     envs = {(part, name): make_case_env(ov, pre, fall, name.startswith("reference"))
             for part, name, ov, pre, fall in CASES}
@@ -162,6 +204,7 @@ def main(argv: list[str] | None = None) -> dict:
         "waves_check": waves,
     }
     write_results(RESULTS, result)
+    write_blocks(docs_blocks(result))
     print("| case | falls on tight_line | failures | touchdown speed diff median / p90 / max [m/s] | "
           "tilt diff median / p90 / max [deg] | CPU s/episode (median) |")
     print("|---|---|---|---|---|---|")

@@ -1,7 +1,8 @@
 """Robustness of AnchorRelease-v0 under random controls: episodes that end without a touchdown, and fallbacks.
 
 Run from the repository root: ``python benchmarks/robustness.py [--episodes 200]``. Writes
-``benchmarks/results/robustness.json``.
+``benchmarks/results/robustness.json`` and its table in ``docs/robustness.md`` (``--docs-only``: only the table,
+from the committed JSON).
 
 Each episode draws its scenario from the default config (seeds 5000, 5001, ...), once with the config's waves and
 once with Hs 0, and is driven by the seeded random controls of ``benchmarks/pre_release_step.py`` (spacing and
@@ -26,6 +27,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import gymnasium as gym  # noqa: E402
+from _docs import DOCS, load_result, run_line, table, write_blocks  # noqa: E402
 from _machine import run_record, write_results  # noqa: E402
 from pre_release_step import ENV_ID, run_episode  # noqa: E402
 
@@ -33,13 +35,36 @@ import moor_env  # noqa: E402, F401 - registers the envs
 
 RESULTS = ROOT / "benchmarks" / "results" / "robustness.json"
 SEAS = {"waves": {}, "calm": {"scenario.sea_state_hs_m": 0.0}}
+DOC = DOCS / "robustness.md"
+COMMAND = "python benchmarks/robustness.py"
+
+
+def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
+    """The table of one run (docs/robustness.md)."""
+    rows = [[sea, s["episodes"], s["touchdowns"], len(s["not_touchdown"]), s["fallbacks"],
+             s["fall_resolution"].get("tight_line", 0), f"{s['touchdown_speed_m_s_median']:.2f}",
+             f"{s['tilt_deg_median']:.2f}"] for sea, s in result["summary"].items()]
+    text = "\n".join([run_line(result, COMMAND), "", table(
+        ["sea", "episodes", "touchdowns", "other ends", "fallbacks", "falls on tight_line",
+         "touchdown speed median [m/s]", "tilt median [deg]"], rows)])
+    return [(DOC, "robustness", text)]
+
+
+def docs_from_results() -> list[tuple[Path, str, str]]:
+    """:func:`docs_blocks` of the committed ``benchmarks/results/robustness.json``."""
+    return docs_blocks(load_result("robustness"))
 
 
 def main(argv: list[str] | None = None) -> dict:
     """Run the episodes of both seas, write the JSON and print a table."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--episodes", type=int, default=200, help="episodes per sea")
+    parser.add_argument("--docs-only", action="store_true",
+                        help="rewrite the docs table from benchmarks/results/robustness.json, run nothing")
     args = parser.parse_args(argv)
+    if args.docs_only:
+        write_blocks(docs_from_results())
+        return load_result("robustness")
     load_before = os.getloadavg()[0]
     summary = {}
     for sea, overrides in SEAS.items():
@@ -58,6 +83,7 @@ def main(argv: list[str] | None = None) -> dict:
     result = {**run_record(load_before), "config": "anchor-release (default), scenarios drawn with seeds 5000..",
               "summary": summary}
     write_results(RESULTS, result)
+    write_blocks(docs_blocks(result))
     print("| sea | episodes | touchdowns | other ends | fallbacks | fall on tight_line |")
     print("|---|---|---|---|---|---|")
     for sea, s in summary.items():

@@ -33,7 +33,8 @@ of the dynamic part (pre-release phase if any, release and fall; statics exclude
 seeded with our statics), best of 3 for runs under ``FAST_S``; our CPU time (``time.process_time``) alongside.
 
 Writes ``benchmarks/results/speed_vs_error[_quick].json``, ``docs/speed_vs_error_<scene>.png``,
-``docs/speed_vs_error_nodes.png`` and ``docs/speed_vs_error.md`` (tables written by this script).
+``docs/speed_vs_error_nodes.png``, ``docs/speed_vs_error.md`` (tables written by this script) and the README's
+headline line (``--docs-only``: the markdown only, from the committed JSON).
 Absolute times are those of the machine named in the output (its load average is recorded).
 """
 
@@ -58,6 +59,7 @@ from tqdm import tqdm
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from _docs import load_result, write_blocks  # noqa: E402
 from _machine import machine  # noqa: E402
 
 from moor_env import load_scene, solve_statics  # noqa: E402
@@ -246,7 +248,7 @@ def preset_branches(name: str) -> dict[str, dict[str, Any]]:
 def moordyn_cases(mode: str, scene: str) -> list[dict[str, Any]]:
     """MoorDyn settings: chain segment c (fibre 5 c, exactly our segments and statics of that level), dt as a
     fraction of its RK4 stability limit. On ``wide`` the quick sweep goes on to 0.5 and 0.25 m chain, towards
-    the 0.3 deg tilt error of the issue's target."""
+    the 0.3 deg tilt error target."""
     if mode == "full":
         grid = [(c, fr) for c in (0.5, 1.0, 2.0, 4.0) for fr in (0.9, 0.7, 0.5, 0.35)] + [(0.25, 0.9), (0.25, 0.5)]
     else:
@@ -658,7 +660,7 @@ def _run(data: dict[str, Any], label: str) -> dict[str, Any] | None:
 
 
 def preset_findings(sc: dict[str, Any]) -> list[str]:
-    """The presets against the issue's targets for ``fast`` (3 % speed, 0.5 deg tilt where large, 10 ms CPU on
+    """The presets against the targets for ``fast`` (3 % speed, 0.5 deg tilt where large, 10 ms CPU on
     gjoa-500)."""
     rows = []
     for name, data in sc.items():
@@ -685,7 +687,7 @@ def preset_findings(sc: dict[str, Any]) -> list[str]:
 
 
 def moordyn_findings(out: dict[str, Any]) -> list[str]:
-    """The issue's two equal-error targets (1 % speed on gjoa-500, 0.3 deg tilt on wide) in words."""
+    """The two equal-error targets (1 % speed on gjoa-500, 0.3 deg tilt on wide) in words."""
     lines = []
     for row in out["equal_error"]:
         target = (row["scene"], row["metric"].split()[0], row["error"])
@@ -705,7 +707,7 @@ def moordyn_findings(out: dict[str, Any]) -> list[str]:
             lines.append(f"{what}: not reached by our runs")
     if not lines:
         return []
-    return ["- **Equal error against MoorDyn** (the issue's targets; same run, same machine): " + "; ".join(lines)
+    return ["- **Equal error against MoorDyn** (same run, same machine): " + "; ".join(lines)
             + ". On `wide` the reference itself moves by the `wide` check difference between its two finest levels "
             "(see References), which is larger than 0.3 deg: a 0.3 deg tilt error there is within the "
             "reference's own uncertainty."]
@@ -967,6 +969,40 @@ def write_docs(out: dict[str, Any]) -> None:
     (DOCS / "speed_vs_error.md").write_text(markdown(out))
 
 
+README = ROOT / "README.md"
+
+
+def docs_blocks(out: dict[str, Any]) -> list[tuple[Path, str, str]]:
+    """The README's headline line from the study's results (the whole of docs/speed_vs_error.md is
+    :func:`markdown`)."""
+    parts = []
+    fast = _run(out["scenes"]["gjoa-500"], "preset fast") if "gjoa-500" in out["scenes"] else None
+    if fast is not None:
+        parts.append(f"the `fast` preset lands the gjoa-500 fall within {fast['speed_err_pct']:+.2f} % of the "
+                     f"converged reference in {fast['cpu_s'] * 1e3:.1f} ms CPU")
+    for row in out["equal_error"]:
+        if (row["scene"], row["metric"].split()[0], row["error"]) == ("gjoa-500", "speed", 1.0) \
+                and row["ratio_measured"] is not None:
+            parts.append(f"at {row['error']:g} % speed error MoorDyn takes {row['ratio_measured']:.0f}x our "
+                         "wall time")
+    mode = "" if out.get("mode") == "full" else " --quick"
+    text = ("**Speed against error**: " + "; ".join(parts) + f". `python benchmarks/speed_vs_error.py{mode}`, run "
+            f"{str(out['date'])[:10]}: [docs/speed_vs_error.md](docs/speed_vs_error.md).")
+    return [(README, "headline-speed_vs_error", text)]
+
+
+def results_for_docs(full: bool = False) -> dict[str, Any]:
+    """The committed results (quick unless ``full``), with the node-scaling slopes the docs read."""
+    out = load_result("speed_vs_error" if full else "speed_vs_error_quick")
+    fit_slopes(out["node_scaling"]["series"])
+    return out
+
+
+def docs_from_results() -> list[tuple[Path, str, str]]:
+    """:func:`docs_blocks` of the committed ``benchmarks/results/speed_vs_error_quick.json``."""
+    return docs_blocks(results_for_docs())
+
+
 def fit_slopes(series: dict[str, Any]) -> None:
     """Log-log slopes of CPU time per simulated second against nodes (all levels, and the 3 largest), in place.
     CPU rather than wall time: on a shared machine the wall time also counts the other jobs' share."""
@@ -990,11 +1026,20 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--no-docs", action="store_true", help="do not write docs/ (JSON only)")
     parser.add_argument("-v", "--verbose", action="store_true", help="one line per run")
     parser.add_argument("--report-only", metavar="JSON", help="rewrite docs/ from a results file, no runs")
+    parser.add_argument("--docs-only", action="store_true",
+                        help="rewrite docs/speed_vs_error.md and the README's headline from the committed "
+                             "benchmarks/results/speed_vs_error[_quick].json (no plots, no runs)")
     args = parser.parse_args(argv)
+    if args.docs_only:
+        out = results_for_docs(args.full)
+        (DOCS / "speed_vs_error.md").write_text(markdown(out))
+        write_blocks(docs_blocks(out))
+        return out
     if args.report_only:
         out = json.loads(Path(args.report_only).read_text())
         fit_slopes(out["node_scaling"]["series"])
         write_docs(out)
+        write_blocks(docs_blocks(out))
         return out
     mode = "full" if args.full else "quick"
     scenes = [s for s in args.scenes.split(",") if s]
@@ -1144,6 +1189,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     json_path.write_text(json.dumps(out, indent=1, default=float) + "\n")
     if not args.no_docs:
         write_docs(out)
+        write_blocks(docs_blocks(out))
 
     # summary on stdout
     print(f"\nspeed_vs_error ({mode}) on {out['measured_on']}, load {load_before:.2f} -> "
