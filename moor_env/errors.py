@@ -6,6 +6,9 @@ that the command line can print it on one line and exit with code 2.
 
 from __future__ import annotations
 
+import difflib
+from collections.abc import Iterable
+
 
 class MoorEnvError(Exception):
     """Base class of all errors raised by moor_env."""
@@ -70,3 +73,40 @@ class StaticsNotConverged(MoorEnvError, RuntimeError):
     def __init__(self, message: str, residual_rel: float | None = None) -> None:
         self.residual_rel = residual_rel
         super().__init__(message)
+
+
+def closest(word: str, choices: Iterable[str]) -> str | None:
+    """The choice closest to a mistyped ``word``, or None if none is close: a close whole name first, else a name
+    whose beginning is close to ``word`` (``frction`` -> ``friction_coefficient``)."""
+    names = list(choices)
+    close = difflib.get_close_matches(word, names, n=1, cutoff=0.6)
+    if not close:
+        heads = {name[:len(word)]: name for name in reversed(names) if len(name) > len(word)}
+        close = [heads[h] for h in difflib.get_close_matches(word, list(heads), n=1, cutoff=0.75)]
+    return close[0] if close else None
+
+
+def did_you_mean(word: str, choices: Iterable[str], prefix: str = "") -> str:
+    """``did you mean PREFIXNAME?`` for the :func:`closest` choice, or "" if none is close."""
+    name = closest(word, choices)
+    return f"did you mean {prefix}{name}?" if name else ""
+
+
+class NoEquilibrium(ConfigError):
+    """The scene has no static equilibrium before release (the solver refuses it at once).
+
+    Parameters
+    ----------
+    key : str
+        The setting to change, e.g. ``installation.mooring_line_length_m``.
+    value : object
+        Its value.
+    allowed : str
+        What would give an equilibrium, in words.
+    cause : str
+        Why there is none, e.g. ``the mooring line is too short``.
+    """
+
+    def __init__(self, key: str, value: object, allowed: str, cause: str) -> None:
+        self.cause = cause
+        super().__init__(key, value, allowed, f"no static equilibrium: {cause}")
