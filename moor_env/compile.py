@@ -11,10 +11,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from moor_env.config import SceneConfig, submerged_mass_per_length
+from moor_env.config import SceneConfig
 from moor_env.errors import ConfigError
 from moor_env.physics import layout as L
 from moor_env.physics.stability import stable_time_step
+from moor_env.scene_geometry import submerged_mass_per_length
 
 VESSEL_INSTALLATION = 0
 VESSEL_SECOND = 1

@@ -14,19 +14,29 @@ name the key, its value and the allowed range.
 from __future__ import annotations
 
 import copy
-import math
 from pathlib import Path
 from typing import Any, Literal
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from moor_env.errors import ConfigError
+from moor_env.config_text import key_help_lines, unknown_key_error, validation_error, yaml_error_text
+from moor_env.errors import ConfigError, did_you_mean
 
-CONFIG_DIR = Path(__file__).resolve().parent.parent / "configs"
+# the names imported "as" themselves are re-exported: the envs and the benchmarks import them from here
+from moor_env.fidelity import FIDELITY_PATH, apply_fidelity, fit_fidelity
+from moor_env.fidelity import TIGHT_LINE as TIGHT_LINE
+from moor_env.fidelity import fidelity_presets as fidelity_presets
+from moor_env.fidelity import tight_line_keys as tight_line_keys
+from moor_env.fidelity import tight_line_needed as tight_line_needed
+from moor_env.fidelity import tight_line_rule as tight_line_rule
+from moor_env.scene_geometry import DROP_HEIGHT_KEY, WATER_DEPTH_KEY, check_scene_consistency, drop_fit_bound_error
+from moor_env.scene_geometry import line_slack_geometry as line_slack_geometry
+from moor_env.scene_geometry import mooring_line_slack as mooring_line_slack
+
+CONFIG_DIR = FIDELITY_PATH.parent
 SCENE_DIR = CONFIG_DIR / "scenes"
 LIBRARY_PATH = CONFIG_DIR / "library.yaml"
-FIDELITY_PATH = CONFIG_DIR / "fidelity.yaml"
 
 
 class _Strict(BaseModel):
@@ -45,7 +55,8 @@ class CurrentConfig(_Strict):
         default=((0.0, 0.8), (300.0, 0.6), (400.0, 0.2)),
         description="(depth below surface [m], speed [m/s]) pairs, depths increasing",
     )
-    direction_deg: float = Field(0.0, ge=-360.0, le=360.0, description="direction the current flows towards, from +x towards +y [deg]")
+    direction_deg: float = Field(0.0, ge=-360.0, le=360.0,
+                                 description="direction the current flows towards, from +x towards +y [deg]")
     scale: float = Field(1.0, ge=0.0, le=5.0, description="multiplies every profile speed; 0 switches current off")
 
     @model_validator(mode="after")
@@ -61,10 +72,13 @@ class CurrentConfig(_Strict):
 class SeabedConfig(_Strict):
     """Flat seabed at ``-water_depth_m``: vertical spring-damper contact and Coulomb friction for line nodes."""
 
-    stiffness_pa_m: float = Field(3.0e6, gt=0.0, le=1.0e9, description="contact pressure per metre of penetration [Pa/m]")
-    damping_pa_s_m: float = Field(3.0e5, ge=0.0, le=1.0e8, description="contact pressure per m/s of penetration rate [Pa s/m]")
+    stiffness_pa_m: float = Field(3.0e6, gt=0.0, le=1.0e9,
+                                  description="contact pressure per metre of penetration [Pa/m]")
+    damping_pa_s_m: float = Field(3.0e5, ge=0.0, le=1.0e8,
+                                  description="contact pressure per m/s of penetration rate [Pa s/m]")
     friction_coefficient: float = Field(0.5, ge=0.0, le=2.0)
-    friction_velocity_m_s: float = Field(0.05, gt=0.0, le=1.0, description="sliding speed below which friction is ramped linearly [m/s]")
+    friction_velocity_m_s: float = Field(0.05, gt=0.0, le=1.0,
+                                         description="sliding speed below which friction is ramped linearly [m/s]")
 
 
 class SeaStateConfig(_Strict):
@@ -75,7 +89,8 @@ class SeaStateConfig(_Strict):
     gamma: float = Field(3.3, ge=1.0, le=10.0, description="JONSWAP peak enhancement")
     n_components: int = Field(64, ge=8, le=1024)
     seed: int = Field(0, ge=0, description="seed of the random component phases")
-    vessel_natural_period_s: float = Field(9.0, ge=2.0, le=40.0, description="heave/surge natural period of the vessels [s]")
+    vessel_natural_period_s: float = Field(9.0, ge=2.0, le=40.0,
+                                           description="heave/surge natural period of the vessels [s]")
     vessel_damping_ratio: float = Field(0.3, gt=0.0, le=2.0)
 
 
@@ -98,13 +113,15 @@ class MaterialConfig(_Strict):
     added mass on ``pi/4 * diameter_m**2`` per metre.
     """
 
-    diameter_m: float = Field(..., gt=0.0, le=2.0, description="hydrodynamic diameter (drag and added-mass reference) [m]")
+    diameter_m: float = Field(..., gt=0.0, le=2.0,
+                              description="hydrodynamic diameter (drag and added-mass reference) [m]")
     mass_per_length_kg_m: float = Field(..., gt=0.0, le=5000.0, description="mass in air per unstretched metre [kg/m]")
     submerged_mass_per_length_kg_m: float | None = Field(
         None, description="mass in air minus displaced water per metre [kg/m]; default: from diameter_m"
     )
     ea_n: float = Field(..., gt=0.0, le=1.0e12, description="axial stiffness [N]")
-    axial_damping_ratio: float = Field(0.3, ge=0.0, le=2.0, description="internal axial damping as a ratio of critical for one segment's axial mode")
+    axial_damping_ratio: float = Field(
+        0.3, ge=0.0, le=2.0, description="internal axial damping as a ratio of critical for one segment's axial mode")
     cd_normal: float = Field(..., ge=0.0, le=20.0)
     cd_tangential: float = Field(..., ge=0.0, le=5.0, description="tangential drag, wetted-perimeter (pi*D) reference")
     ca_normal: float = Field(1.0, ge=0.0, le=5.0)
@@ -124,12 +141,14 @@ class AnchorSectionConfig(_Strict):
     """One axial section of the anchor, listed from the tip backwards."""
 
     length_m: float = Field(..., gt=0.0, le=50.0)
-    outer_diameter_m: float = Field(..., gt=0.0, le=10.0, description="outer diameter: buoyancy, drag and added-mass reference [m]")
+    outer_diameter_m: float = Field(..., gt=0.0, le=10.0,
+                                    description="outer diameter: buoyancy, drag and added-mass reference [m]")
     flooded_diameter_m: float = Field(0.0, ge=0.0, le=10.0, description="diameter of the open, water-filled bore [m]")
     mass_per_length_kg_m: float = Field(..., gt=0.0, le=1.0e5, description="structural mass per metre [kg/m]")
     cd_normal: float = Field(..., ge=0.0, le=50.0, description="normal drag on outer_diameter_m (fins: much larger)")
     ca_normal: float = Field(1.0, ge=0.0, le=10.0)
-    cd_tangential: float = Field(0.0, ge=0.0, le=10.0, description="skin friction on the wetted perimeter pi*outer_diameter_m")
+    cd_tangential: float = Field(0.0, ge=0.0, le=10.0,
+                                 description="skin friction on the wetted perimeter pi*outer_diameter_m")
 
     @model_validator(mode="after")
     def _check_bore(self) -> AnchorSectionConfig:
@@ -142,10 +161,14 @@ class AnchorConfig(_Strict):
     """Rigid dart anchor: sections from tip to back tip, end pressure drag on the end faces."""
 
     sections: tuple[AnchorSectionConfig, ...] = Field(..., min_length=1)
-    tip_drag_coefficient: float = Field(0.387, ge=0.0, le=5.0, description="pressure drag on the tip face, reference pi/4*D^2")
-    back_drag_coefficient: float = Field(0.043, ge=0.0, le=5.0, description="pressure drag on the back face, reference pi/4*D^2")
-    mass_scale: float = Field(1.0, ge=0.5, le=1.5, description="multiplies the structural mass (fabrication tolerance studies)")
-    quadrature_points: int = Field(26, ge=4, le=400, description="points along the body for distributed drag and added mass")
+    tip_drag_coefficient: float = Field(0.387, ge=0.0, le=5.0,
+                                        description="pressure drag on the tip face, reference pi/4*D^2")
+    back_drag_coefficient: float = Field(0.043, ge=0.0, le=5.0,
+                                         description="pressure drag on the back face, reference pi/4*D^2")
+    mass_scale: float = Field(1.0, ge=0.5, le=1.5,
+                              description="multiplies the structural mass (fabrication tolerance studies)")
+    quadrature_points: int = Field(26, ge=4, le=400,
+                                   description="points along the body for distributed drag and added mass")
 
     @property
     def length_m(self) -> float:
@@ -158,7 +181,8 @@ class ReleaseUnitConfig(_Strict):
 
     mass_kg: float = Field(1780.0, ge=0.0, le=1.0e5)
     volume_m3: float = Field(0.672, ge=0.0, le=100.0)
-    drag_area_m2: float = Field(0.98, ge=0.0, le=100.0, description="Cd times projected area, applied isotropically [m^2]")
+    drag_area_m2: float = Field(0.98, ge=0.0, le=100.0,
+                                description="Cd times projected area, applied isotropically [m^2]")
     added_mass_coefficient: float = Field(1.0, ge=0.0, le=5.0, description="added mass as a multiple of rho*volume_m3")
     max_release_load_n: float = Field(273.0e3 * 9.81, gt=0.0, description="rated release load [N] (273 t)")
 
@@ -192,15 +216,19 @@ class InstallationConfig(_Strict):
     fibre_material: str = "polyester_254"
     fairlead_depth_m: float = Field(0.0, ge=0.0, le=50.0, description="depth of both vessel hang-off points [m]")
     components: ComponentsConfig = ComponentsConfig()
-    release_time_s: float = Field(0.0, ge=0.0, le=3600.0, description="pre-release simulated time before the release [s]")
-    spacing_rate_m_s: float = Field(0.0, ge=-2.0, le=2.0, description="second vessel's horizontal speed before release [m/s]")
-    payout_rate_m_s: float = Field(0.0, ge=-1.0, le=1.0, description="mooring-line winch payout rate before release [m/s]")
+    release_time_s: float = Field(0.0, ge=0.0, le=3600.0,
+                                  description="pre-release simulated time before the release [s]")
+    spacing_rate_m_s: float = Field(0.0, ge=-2.0, le=2.0,
+                                    description="second vessel's horizontal speed before release [m/s]")
+    payout_rate_m_s: float = Field(0.0, ge=-1.0, le=1.0,
+                                   description="mooring-line winch payout rate before release [m/s]")
 
 
 class CatenaryLineConfig(_Strict):
     """A single mooring line from a seabed anchor point to a fairlead (statics validation scenes)."""
 
-    segments: tuple[tuple[str, float], ...] = Field(..., min_length=1, description="(material, length [m]) from the anchor up")
+    segments: tuple[tuple[str, float], ...] = Field(..., min_length=1,
+                                                    description="(material, length [m]) from the anchor up")
     anchor_x_m: float = 0.0
     fairlead_x_m: float = Field(..., description="horizontal position of the fairlead [m]")
     fairlead_depth_m: float = Field(0.0, ge=0.0)
@@ -215,8 +243,10 @@ class DiscretizationConfig(_Strict):
     wire_segment_m: float = Field(10.0, ge=0.1, le=500.0)
     catenary_segment_m: float = Field(2.0, ge=0.1, le=200.0)
     integrator: Literal["symplectic_euler", "rk2", "implicit_euler"] = "symplectic_euler"
-    dt_s: float | None = Field(None, gt=0.0, le=1.0, description="time step [s]; None derives it from the stability limit")
-    dt_safety: float = Field(0.9, gt=0.0, le=1.0, description="fraction of the stability limit used when dt_s is derived")
+    dt_s: float | None = Field(None, gt=0.0, le=1.0,
+                               description="time step [s]; None derives it from the stability limit")
+    dt_safety: float = Field(0.9, gt=0.0, le=1.0,
+                             description="fraction of the stability limit used when dt_s is derived")
     fall_integrator: Literal["symplectic_euler", "rk2", "implicit_euler"] | None = Field(
         None, description="integrator of the fall after the release, at dt_safety times its own limit on the mesh "
         "of the fall (e.g. symplectic_euler after an implicit pre-release phase: the explicit reference fall); "
@@ -229,7 +259,8 @@ class DiscretizationConfig(_Strict):
 class SimulationConfig(_Strict):
     """Run control."""
 
-    max_fall_time_s: float = Field(30.0, gt=0.0, le=600.0, description="fall time after which a run without touchdown stops [s]")
+    max_fall_time_s: float = Field(30.0, gt=0.0, le=600.0,
+                                   description="fall time after which a run without touchdown stops [s]")
     record_interval_s: float = Field(0.02, gt=0.0, le=10.0)
     snapshot_interval_s: float = Field(0.5, gt=0.0, le=60.0)
     speed_limit_m_s: float = Field(300.0, gt=0.0, description="any node faster than this is treated as a blow-up [m/s]")
@@ -310,7 +341,8 @@ def _resolve_library(data: dict[str, Any]) -> dict[str, Any]:
         if isinstance(entry, dict) and "library" in entry:
             name = entry["library"]
             if name not in library[section]:
-                raise ConfigError(f"{key}.library", name, "one of " + ", ".join(library[section]))
+                raise ConfigError(f"{key}.library", name, "one of " + ", ".join(library[section]),
+                                  did_you_mean(str(name), library[section]))
             merged = copy.deepcopy(library[section][name])
             merged.update({k: v for k, v in entry.items() if k != "library"})
             return merged
@@ -327,13 +359,17 @@ def _resolve_library(data: dict[str, Any]) -> dict[str, Any]:
 
 def _resolve_scene_path(scene: str | Path) -> Path:
     path = Path(scene)
-    if path.suffix in (".yaml", ".yml"):
-        if not path.is_file():
-            raise ConfigError("scene", str(scene), "an existing YAML file", "file not found")
+    if path.is_dir():
+        raise ConfigError("scene", str(scene), "a bundled scene name or a YAML file", "this is a directory")
+    if path.is_file():
         return path
+    if path.suffix in (".yaml", ".yml"):
+        raise ConfigError("scene", str(scene), "an existing YAML file", "file not found")
     candidate = _scene_dir() / f"{scene}.yaml"
     if not candidate.is_file():
-        raise ConfigError("scene", str(scene), "one of " + ", ".join(bundled_scene_names()) + " or a YAML path")
+        names = bundled_scene_names()
+        raise ConfigError("scene", str(scene), "one of " + ", ".join(names) + " or a YAML path",
+                          did_you_mean(str(scene), names))
     return candidate
 
 
@@ -349,18 +385,20 @@ def _apply_override(data: dict[str, Any], key: str, value: Any) -> None:
     chain = data.get("installation", {}).get("chain_material", "chain_142")
     path = SET_SHORTCUTS.get(key, key).replace("{chain}", str(chain))
     parts = path.split(".")
+    unknown = unknown_key_error(SceneConfig, key, parts, value, data, list(SET_SHORTCUTS))
+    if unknown is not None:
+        raise unknown
     node: Any = data
     for i, part in enumerate(parts[:-1]):
         if not isinstance(node, dict):
-            raise ConfigError(key, value, "a known key: " + ", ".join(SET_SHORTCUTS), f"'{'.'.join(parts[:i])}' is not a section")
+            raise ConfigError(key, value, "a dotted path into the scene", f"'{'.'.join(parts[:i])}' is not a section")
         if part not in node:
-            if part in _OPTIONAL_SECTIONS:
-                node[part] = {}
-            else:
-                raise ConfigError(key, value, "a known key: " + ", ".join(SET_SHORTCUTS))
+            if part not in _OPTIONAL_SECTIONS:
+                raise ConfigError(key, value, "a key of a section this scene has", f"it has no '{part}' section")
+            node[part] = {}
         node = node[part]
     if not isinstance(node, dict):
-        raise ConfigError(key, value, "a known key: " + ", ".join(SET_SHORTCUTS))
+        raise ConfigError(key, value, "a dotted path into the scene", f"'{'.'.join(parts[:-1])}' is not a section")
     node[parts[-1]] = value
 
 
@@ -369,39 +407,21 @@ _OPTIONAL_SECTIONS = {
 }
 
 
-def _format_range(err: dict[str, Any]) -> str:
-    ctx = err.get("ctx") or {}
-    bounds = []
-    for name, sym in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<=")):
-        if name in ctx:
-            bounds.append(f"{sym} {ctx[name]}")
-    if bounds:
-        return " and ".join(bounds)
-    if "expected" in ctx:
-        return f"one of {ctx['expected']}"
-    if err["type"] == "extra_forbidden":
-        return "a known key (this one does not exist; see moor-env drop --help)"
-    if err["type"].startswith(("float", "int", "bool")):
-        return "a " + {"f": "number", "i": "whole number", "b": "boolean"}[err["type"][0]]
-    if err["type"] == "missing":
-        return "a value (required)"
-    return err.get("msg", "a valid value")
+def set_key_help() -> list[str]:
+    """One line per ``--set`` shortcut: its name, unit or type, allowed range and the dotted path it sets."""
+    return key_help_lines(SceneConfig, SET_SHORTCUTS)
 
 
-def _validation_to_config_error(exc: ValidationError, data: dict[str, Any]) -> ConfigError:
-    err = exc.errors()[0]
-    loc = ".".join(str(p) for p in err["loc"])
-    value = err.get("input")
-    if isinstance(value, dict):
-        value = "{...}"
-    plain = ("greater_than", "less_than", "greater_than_equal", "less_than_equal", "extra_forbidden")
-    reason = "" if err["type"] in plain or err["type"].startswith(("float", "int", "bool")) else err["msg"]
-    return ConfigError(loc or "scene", value, _format_range(err), reason)
-
-
-def scene_from_dict(data: dict[str, Any]) -> SceneConfig:
+def scene_from_dict(data: dict[str, Any], depth_key: str = DROP_HEIGHT_KEY) -> SceneConfig:
     """Validate a plain dict (as read from YAML) into a :class:`SceneConfig`, filling the discretization
     keys it does not set from its ``fidelity`` preset.
+
+    Parameters
+    ----------
+    data : dict
+    depth_key : str
+        The key a drop height that does not fit the water depth is reported on (see
+        :func:`moor_env.scene_geometry.check_scene_consistency`).
 
     Raises
     ------
@@ -414,18 +434,23 @@ def scene_from_dict(data: dict[str, Any]) -> SceneConfig:
         if fitted is not None:
             scene = SceneConfig.model_validate(fitted)
     except ValidationError as exc:
-        raise _validation_to_config_error(exc, data) from None
-    check_scene_consistency(scene)
+        raise drop_fit_bound_error(SceneConfig, exc, data) or validation_error(SceneConfig, exc, data) from None
+    check_scene_consistency(scene, depth_key)
     return scene
 
 
 def scene_dict(scene: str | Path) -> dict[str, Any]:
     """The raw mapping of a bundled scene or YAML file with library entries expanded (for editing)."""
     path = _resolve_scene_path(scene)
-    with open(path, encoding="utf-8") as fh:
-        data = yaml.safe_load(fh)
+    try:
+        with open(path, encoding="utf-8") as fh:
+            data = yaml.safe_load(fh)
+    except yaml.YAMLError as exc:
+        raise ConfigError("scene", str(path), "a YAML file without syntax errors", yaml_error_text(exc)) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError("scene", str(path), "a readable UTF-8 YAML file", str(exc)) from None
     if not isinstance(data, dict):
-        raise ConfigError("scene", str(path), "a YAML mapping")
+        raise ConfigError("scene", str(path), "a YAML mapping", f"the file holds a {type(data).__name__}")
     return _resolve_library(copy.deepcopy(data))
 
 
@@ -438,7 +463,8 @@ def load_scene(scene: str | Path, overrides: dict[str, Any] | None = None) -> Sc
         Bundled scene name or path to a YAML file.
     overrides : dict, optional
         ``{key: value}`` where key is a shortcut from :data:`SET_SHORTCUTS` (``water_depth_m``...) or a
-        dotted path into the scene (``environment.seabed.friction_coefficient``).
+        dotted path into the scene (``environment.seabed.friction_coefficient``). A drop height that does not
+        fit the water depth is reported on the water depth when the overrides set it and not the drop height.
 
     Returns
     -------
@@ -446,204 +472,9 @@ def load_scene(scene: str | Path, overrides: dict[str, Any] | None = None) -> Sc
         The validated, frozen scene.
     """
     data = scene_dict(scene)
-    for key, value in (overrides or {}).items():
+    overrides = overrides or {}
+    for key, value in overrides.items():
         _apply_override(data, key, value)
-    return scene_from_dict(data)
-
-
-def fidelity_presets() -> dict[str, dict[str, Any]]:
-    """The discretization presets of ``configs/fidelity.yaml`` by name."""
-    with open(FIDELITY_PATH, encoding="utf-8") as fh:
-        return yaml.safe_load(fh)
-
-
-def apply_fidelity(data: dict[str, Any]) -> dict[str, Any]:
-    """Fill the ``discretization`` keys a scene does not set from its ``fidelity`` preset (``default`` if
-    none); ``custom`` uses only what the scene sets."""
-    name = data.get("fidelity", "default")
-    if name == "custom":
-        return data
-    presets = fidelity_presets()
-    if name not in presets:
-        raise ConfigError("fidelity", name, "one of " + ", ".join([*presets, "custom"]))
-    disc = data.setdefault("discretization", {})
-    if not isinstance(disc, dict):
-        return data
-    for key, value in presets[name].items():
-        if key != TIGHT_LINE:
-            disc.setdefault(key, value)
-    return data
-
-
-TIGHT_LINE = "tight_line"  # preset entry: the resolution used where the mooring line tightens during the fall
-
-
-def tight_line_rule(fidelity: str) -> dict[str, Any] | None:
-    """The ``tight_line`` entry of a fidelity preset (the thresholds of :func:`tight_line_needed` and the
-    discretization keys it sets), or None for a preset without one and for ``custom``."""
-    if fidelity == "custom":
-        return None
-    return fidelity_presets().get(fidelity, {}).get(TIGHT_LINE)
-
-
-TIGHT_LINE_THRESHOLDS = ("slack_below_m", "chord_angle_above_deg", "waves_above_hs_m", "moving_above_m_s")
-TIGHT_LINE_IN_WAVES = "in_waves"  # tight_line entry: keys that replace its own in waves above waves_above_hs_m
-
-
-def tight_line_needed(rule: dict[str, Any], slack_m: float, chord_angle_deg: float, hs_m: float,
-                      line_speed_m_s: float = 0.0) -> bool:
-    """Whether the fall needs the ``tight_line`` resolution of ``rule``: the mooring line has less than
-    ``slack_below_m`` of slack at touchdown, its chord is further than ``chord_angle_above_deg`` from the vertical
-    (:func:`mooring_line_slack`), the significant wave height ``hs_m`` exceeds ``waves_above_hs_m``, or the
-    line's fastest node at the release is faster than ``moving_above_m_s`` [m/s]. The coarse resolution was
-    validated on falls from a calm loop at rest only."""
-    return (slack_m < rule["slack_below_m"] or chord_angle_deg > rule["chord_angle_above_deg"]
-            or hs_m > rule["waves_above_hs_m"] or line_speed_m_s > rule["moving_above_m_s"])
-
-
-def tight_line_keys(rule: dict[str, Any], hs_m: float = 0.0) -> dict[str, Any]:
-    """The discretization keys of a ``tight_line`` rule (without its thresholds) for a sea of significant wave
-    height ``hs_m`` [m]: above the rule's ``waves_above_hs_m`` its ``in_waves`` keys replace the others."""
-    keys = {k: v for k, v in rule.items() if k not in TIGHT_LINE_THRESHOLDS and k != TIGHT_LINE_IN_WAVES}
-    if hs_m > rule["waves_above_hs_m"]:
-        keys.update(rule.get(TIGHT_LINE_IN_WAVES, {}))
-    return keys
-
-
-def fit_fidelity(scene: SceneConfig, data: dict[str, Any]) -> dict[str, Any] | None:
-    """``data`` with its preset's ``tight_line`` resolution where the scene needs it, else None.
-
-    A preset's ``tight_line`` entry (thresholds and discretization keys) applies where the mooring line from the
-    release point, when the anchor touches down, has less slack than ``slack_below_m`` or a chord steeper from
-    the vertical than ``chord_angle_above_deg`` (:func:`mooring_line_slack`), or in waves higher than
-    ``waves_above_hs_m``, or with vessel or winch moves before the release (:func:`tight_line_needed`): there the
-    chain loop is pulled or moving during the fall, a coarse loop goes taut too early, and it carries the tilt and
-    the snap; a slack line hanging nearly straight down and at rest in calm water does not need it.
-    Keys the scene sets explicitly still win. The geometry checked is the scene's at its release (after
-    ``release_time_s`` of spacing move and payout). With ``discretization.fit_to_geometry`` false nothing is
-    fitted: the envs, whose agents change the geometry before the release, apply the same rule to the drawn
-    scenario at the reset and again, for the fall, at the release (:mod:`moor_env.remesh`).
-    """
-    rule = tight_line_rule(data.get("fidelity", "default"))
-    if rule is None or not scene.discretization.fit_to_geometry:
-        return None
-    geometry = mooring_line_slack(scene, tip_height_m=0.0)
-    inst = scene.installation
-    moves = inst is not None and inst.release_time_s > 0.0 and (inst.spacing_rate_m_s or inst.payout_rate_m_s)
-    # a scripted pre-release move leaves the loop moving at the release by an amount not known before the run
-    if geometry is None or not tight_line_needed(rule, *geometry, scene.environment.sea_state.hs_m,
-                                                 math.inf if moves else 0.0):
-        return None
-    fitted = copy.deepcopy(data)
-    disc = fitted.setdefault("discretization", {})
-    for key, value in tight_line_keys(rule, scene.environment.sea_state.hs_m).items():
-        disc.setdefault(key, value)
-    return apply_fidelity(fitted)
-
-
-def mooring_line_slack(scene: SceneConfig, tip_height_m: float) -> tuple[float, float] | None:
-    """Slack of the mooring line (free length from the release point to the second vessel minus its chord) [m]
-    and the chord's angle from the vertical [deg], with the anchor tip ``tip_height_m`` above the seabed, the
-    vertical chain hanging straight above the anchor and the spacing and line length as at the release (after
-    ``release_time_s`` of spacing move and payout); None without a mooring line.
-    """
-    inst = scene.installation
-    if inst is None or scene.anchor is None or not inst.components.mooring_line:
-        return None
-    return line_slack_geometry(
-        water_depth_m=scene.environment.water_depth_m, tip_height_m=tip_height_m, anchor_length_m=scene.anchor.length_m,
-        vertical_chain_m=inst.vertical_chain_length_m, fairlead_depth_m=inst.fairlead_depth_m,
-        spacing_m=inst.vessel_spacing_m + inst.spacing_rate_m_s * inst.release_time_s,
-        line_length_m=inst.mooring_line_length_m + inst.payout_rate_m_s * inst.release_time_s)
-
-
-def line_slack_geometry(water_depth_m: float, tip_height_m: float, anchor_length_m: float, vertical_chain_m: float,
-                        fairlead_depth_m: float, spacing_m: float, line_length_m: float) -> tuple[float, float]:
-    """:func:`mooring_line_slack` from plain numbers: ``line_length_m`` includes the vertical chain, ``spacing_m``
-    is the horizontal distance from the release point to the second vessel's fairlead [m]."""
-    z_release = -(water_depth_m - tip_height_m - anchor_length_m - vertical_chain_m)
-    rise = -(z_release + fairlead_depth_m)
-    slack = line_length_m - vertical_chain_m - math.hypot(spacing_m, rise)
-    return slack, math.degrees(math.atan2(spacing_m, rise))
-
-
-def check_scene_consistency(scene: SceneConfig) -> None:
-    """Cross-field physical checks that single-field ranges cannot express.
-
-    Raises
-    ------
-    ConfigError
-        Naming the key whose value makes the scene impossible.
-    """
-    depth = scene.environment.water_depth_m
-    for name, mat in scene.materials.items():
-        if mat.submerged_mass_per_length_kg_m is None:
-            displaced = scene.environment.water_density_kg_m3 * math.pi / 4.0 * mat.diameter_m**2
-            if displaced >= mat.mass_per_length_kg_m:
-                raise ConfigError(f"materials.{name}.diameter_m", mat.diameter_m, "a value that leaves the line heavier than water",
-                                  "give submerged_mass_per_length_kg_m for buoyant lines")
-    if scene.kind == "catenary_line":
-        line = scene.catenary_line
-        assert line is not None
-        for i, (mat, length) in enumerate(line.segments):
-            if mat not in scene.materials:
-                raise ConfigError(f"catenary_line.segments[{i}]", mat, "one of " + ", ".join(scene.materials))
-            if length <= 0:
-                raise ConfigError(f"catenary_line.segments[{i}]", length, "> 0 m")
-        if line.fairlead_depth_m >= depth:
-            raise ConfigError("catenary_line.fairlead_depth_m", line.fairlead_depth_m, f"< water_depth_m = {depth}")
-        return
-    inst = scene.installation
-    anchor = scene.anchor
-    assert inst is not None and anchor is not None
-    comp = inst.components
-    for key in ("wire_material", "chain_material", "fibre_material"):
-        name = getattr(inst, key)
-        needed = {"wire_material": comp.wire, "chain_material": comp.vertical_chain or comp.mooring_line,
-                  "fibre_material": comp.mooring_line}[key]
-        if needed and name not in scene.materials:
-            raise ConfigError(f"installation.{key}", name, "one of " + ", ".join(scene.materials))
-    if comp.mooring_line and not comp.vertical_chain:
-        raise ConfigError("installation.components.mooring_line", True, "false when vertical_chain is false",
-                          "the mooring line hangs from the release point at the top of the vertical chain")
-    if comp.wire and not comp.vertical_chain:
-        raise ConfigError("installation.components.wire", True, "false when vertical_chain is false")
-    hang = anchor.length_m + (inst.vertical_chain_length_m if comp.vertical_chain else 0.0)
-    max_drop = depth - inst.fairlead_depth_m - hang - 1.0
-    if inst.drop_height_m > max_drop:
-        raise ConfigError("installation.drop_height_m", inst.drop_height_m, f"<= {max_drop:.1f} m",
-                          "anchor, vertical chain and wire must fit between the vessels and the drop height")
-    if comp.mooring_line:
-        if inst.bottom_chain_length_m < inst.vertical_chain_length_m:
-            raise ConfigError("installation.vertical_chain_length_m", inst.vertical_chain_length_m,
-                              f"<= bottom_chain_length_m = {inst.bottom_chain_length_m} m")
-        if inst.mooring_line_length_m < inst.bottom_chain_length_m:
-            raise ConfigError("installation.mooring_line_length_m", inst.mooring_line_length_m,
-                              f">= bottom_chain_length_m = {inst.bottom_chain_length_m} m")
-        z_release = -(depth - inst.drop_height_m - hang)
-        chord = math.hypot(inst.vessel_spacing_m, z_release + inst.fairlead_depth_m)
-        free_length = inst.mooring_line_length_m - inst.vertical_chain_length_m
-        if free_length < chord * 1.001:
-            raise ConfigError("installation.mooring_line_length_m", inst.mooring_line_length_m,
-                              f">= {chord + inst.vertical_chain_length_m:.1f} m",
-                              "the line from the release point must reach the second vessel")
-    if comp.wire:
-        wire = scene.materials[inst.wire_material]
-        wsub = _submerged(scene, wire)
-        g = scene.environment.gravity_m_s2
-        anchor_mass = anchor.mass_scale * sum(s.mass_per_length_kg_m * s.length_m for s in anchor.sections)
-        hang_load = anchor_mass * g + (depth - inst.drop_height_m) * wsub * g
-        if hang_load >= wire.mbl_n:
-            raise ConfigError(f"materials.{inst.wire_material}.mbl_n", wire.mbl_n, f"> {hang_load:.3g} N",
-                              "the wire cannot carry the anchor and its own weight")
-
-
-def _submerged(scene: SceneConfig, mat: MaterialConfig) -> float:
-    if mat.submerged_mass_per_length_kg_m is not None:
-        return mat.submerged_mass_per_length_kg_m
-    return mat.mass_per_length_kg_m - scene.environment.water_density_kg_m3 * math.pi / 4.0 * mat.diameter_m**2
-
-
-def submerged_mass_per_length(scene: SceneConfig, material: str) -> float:
-    """Submerged mass per metre of a material [kg/m] (given, or from its diameter)."""
-    return _submerged(scene, scene.materials[material])
+    paths = {SET_SHORTCUTS.get(k, k) for k in overrides}
+    depth_key = WATER_DEPTH_KEY if WATER_DEPTH_KEY in paths and DROP_HEIGHT_KEY not in paths else DROP_HEIGHT_KEY
+    return scene_from_dict(data, depth_key)

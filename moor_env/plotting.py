@@ -2,12 +2,42 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from moor_env.errors import ConfigError
 from moor_env.physics import layout as L
-from moor_env.simulation import DropResult
+
+if TYPE_CHECKING:
+    from moor_env.simulation import DropResult
+
+
+def check_plot_path(path: str | Path) -> Path:
+    """Check that a figure can be written to ``path`` before any simulation time is spent on it.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``--plot`` and the path when it is a directory, its directory does not exist or is not writable,
+        the file exists and is not writable, or its suffix is not a figure type.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    suffixes = sorted("." + s for s in FigureCanvasAgg.get_supported_filetypes())
+    path = Path(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    if path.is_dir():
+        raise ConfigError("--plot", str(path), "a file path (e.g. drop.png)", "this is a directory")
+    if path.suffix.lower() not in suffixes:
+        raise ConfigError("--plot", str(path), "a file ending in one of " + ", ".join(suffixes))
+    if not parent.is_dir():
+        raise ConfigError("--plot", str(path), "a file in an existing directory", f"no directory {parent}")
+    if not os.access(parent, os.W_OK | os.X_OK) or (path.exists() and not os.access(path, os.W_OK)):
+        raise ConfigError("--plot", str(path), "a writable file", "permission denied")
+    return path
 
 
 def plot_drop(result: DropResult, path: str | Path, title: str = "") -> Path:
@@ -38,11 +68,12 @@ def plot_drop(result: DropResult, path: str | Path, title: str = "") -> Path:
     for k, snap in enumerate(snaps):
         shade = cmap(k / max(len(snaps) - 1, 1))
         for name, pts in snap["lines"].items():
-            ax_scene.plot(pts[:, 0], pts[:, 2], color=colors.get(name, shade), alpha=0.25 + 0.75 * k / max(len(snaps) - 1, 1),
-                          lw=1.0, label=name if k == 0 else None)
+            ax_scene.plot(pts[:, 0], pts[:, 2], color=colors.get(name, shade),
+                          alpha=0.25 + 0.75 * k / max(len(snaps) - 1, 1), lw=1.0, label=name if k == 0 else None)
         if snap["tip"] is not None:
+            label = f"anchor t={snap['t']:.1f} s" if k in (0, len(snaps) - 1) else None
             ax_scene.plot([snap["back"][0], snap["tip"][0]], [snap["back"][2], snap["tip"][2]], color=shade, lw=4,
-                          solid_capstyle="butt", label=f"anchor t={snap['t']:.1f} s" if k in (0, len(snaps) - 1) else None)
+                          solid_capstyle="butt", label=label)
     hist = result.history
     if hist.shape[0]:
         t = hist[:, L.H_TIME] - result.release_time_s

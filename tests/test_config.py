@@ -50,14 +50,14 @@ def test_cli_reports_bad_input_on_one_line_with_exit_code_2():
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1
-    assert "environment.water_depth_m=-3" in lines[0] and "> 10.0" in lines[0]
+    assert "environment.water_depth_m=-3.0: allowed >= 132.5 and <= 6000 m" in lines[0]
 
 
 def test_fast_fit_takes_the_tight_line_resolution_for_waves_and_pre_release_moves():
     """configs/fidelity.yaml: the coarse branch of `fast` was validated on calm falls from a loop at rest only.
     gjoa-500 as bundled (50 m of slack, chord 6.5 deg) stays coarse; waves or a scripted vessel move before the
     release switch to tight_line (in waves with its in_waves keys: a 1 m loop chain)."""
-    from moor_env.config import fidelity_presets
+    from moor_env.fidelity import fidelity_presets
 
     coarse = fidelity_presets()["fast"]["loop_chain_segment_m"]
     tight = fidelity_presets()["fast"]["tight_line"]["loop_chain_segment_m"]

@@ -19,8 +19,10 @@ import pytest
 
 from moor_env import load_scene, simulate_drop
 from moor_env.compile import compile_scene
-from moor_env.config import SceneConfig, fidelity_presets, mooring_line_slack
+from moor_env.config import SceneConfig
+from moor_env.fidelity import fidelity_presets
 from moor_env.physics.layout import NI_KIND, NODE_INACTIVE
+from moor_env.scene_geometry import mooring_line_slack
 
 WIDE = {"vessel_spacing_m": 170.0, "vertical_chain_length_m": 10.0}
 SNAP = {"vessel_spacing_m": 170.0}
