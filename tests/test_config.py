@@ -8,7 +8,9 @@ import sys
 import pytest
 
 from moor_env import ConfigError, compile_scene, load_scene
-from moor_env.config import bundled_scene_names
+from moor_env.config import SET_SHORTCUTS, bundled_scene_names, scene_dict, scene_from_dict, set_key_help
+from moor_env.errors import closest
+from moor_env.scene_geometry import max_drop_height_m, min_water_depth_m
 
 
 @pytest.mark.parametrize("name", bundled_scene_names())
@@ -67,3 +69,58 @@ def test_fast_fit_takes_the_tight_line_resolution_for_waves_and_pre_release_move
                              "moves": {"release_time_s": 10.0, "installation.spacing_rate_m_s": 0.1},
                              "waits": {"release_time_s": 10.0}}.items()}
     assert loop == {"calm": coarse, "waves": in_waves, "moves": tight, "waits": coarse}
+
+
+def test_yaml_syntax_error_names_the_file_line_and_column(tmp_path):
+    path = tmp_path / "broken.yaml"
+    path.write_text("name: broken\nenvironment:\n  water_depth_m: 500\n installation: {}\n")
+    with pytest.raises(ConfigError) as info:
+        load_scene(path)
+    assert info.value.key == "scene" and info.value.value == str(path)
+    assert "line 4, column" in str(info.value) and "\n" not in str(info.value)
+
+
+def test_unknown_scene_key_is_named_with_the_nearest_known_one():
+    data = scene_dict("gjoa-500")
+    data["installation"]["drop_heigth_m"] = data["installation"].pop("drop_height_m")
+    with pytest.raises(ConfigError) as info:
+        scene_from_dict(data)
+    assert info.value.key == "installation.drop_heigth_m"
+    assert "did you mean installation.drop_height_m?" in str(info.value)
+
+
+@pytest.mark.parametrize(("overrides", "key", "allowed"), [
+    ({"drop_height_m": 437.0}, "installation.drop_height_m", "> 1 and <= 436.0 m"),
+    ({"drop_height_m": 600.0}, "installation.drop_height_m", "> 1 and <= 436.0 m"),
+    ({"water_depth_m": 132.0}, "environment.water_depth_m", ">= 132.5 and <= 6000 m"),
+    ({"environment.water_depth_m": 132.0}, "environment.water_depth_m", ">= 132.5 and <= 6000 m"),
+    ({"water_depth_m": 132.0, "drop_height_m": 68.5}, "installation.drop_height_m", "> 1 and <= 68.0 m"),
+])
+def test_drop_height_that_does_not_fit_names_the_key_set_with_the_scene_range(overrides, key, allowed):
+    with pytest.raises(ConfigError) as info:
+        load_scene("gjoa-500", overrides)
+    assert info.value.key == key and info.value.allowed == allowed
+
+
+def test_drop_height_limits_are_the_ones_the_consistency_check_applies():
+    scene = load_scene("gjoa-500")
+    assert max_drop_height_m(scene) == pytest.approx(436.0)
+    assert min_water_depth_m(scene) == pytest.approx(132.5)
+    assert load_scene("gjoa-500", {"drop_height_m": 436.0}).installation.drop_height_m == 436.0
+    assert load_scene("gjoa-500", {"water_depth_m": 132.5}).environment.water_depth_m == 132.5
+
+
+def test_set_key_help_has_every_shortcut_with_its_unit():
+    lines = {line.split()[0]: line for line in set_key_help()}
+    assert list(lines) == list(SET_SHORTCUTS)
+    assert "[m]" in lines["water_depth_m"] and "> 10 and <= 6000" in lines["water_depth_m"]
+    assert "[integer]" in lines["sea_state_seed"]
+
+
+@pytest.mark.parametrize(("word", "choices", "expected"), [
+    ("water_dept_m", ["water_depth_m", "drop_height_m"], "water_depth_m"),
+    ("frction", ["stiffness_pa_m", "friction_coefficient"], "friction_coefficient"),
+    ("xyz", ["water_depth_m"], None),
+])
+def test_closest_name(word, choices, expected):
+    assert closest(word, choices) == expected
