@@ -8,7 +8,9 @@ All values are SI. A key whose unit is not obvious carries it as a suffix (``_m`
 no suffix. Validation is done by pydantic (chosen over hand-written checks because it gives strict
 unknown-key rejection, type coercion rules and range constraints with a machine-readable error location);
 :func:`load_scene` turns its errors into one-line :class:`~moor_env.errors.ConfigError` messages that
-name the key, its value and the allowed range.
+name the key, its value and the allowed range (:mod:`moor_env.config_text`, with the nearest known key for an
+unknown one). Quantities derived from a validated scene and the cross-field checks live in
+:mod:`moor_env.scene_geometry`; the discretization presets and their fit to the geometry in :mod:`moor_env.fidelity`.
 """
 
 from __future__ import annotations
@@ -390,6 +392,11 @@ def _apply_override(data: dict[str, Any], key: str, value: Any) -> None:
         raise unknown
     node: Any = data
     for i, part in enumerate(parts[:-1]):
+        if isinstance(node, list):  # an entry of a list section by its index: anchor.sections.0.length_m
+            if not (part.isdigit() and int(part) < len(node)):
+                raise ConfigError(key, value, f"an index 0 .. {len(node) - 1} of {'.'.join(parts[:i])}")
+            node = node[int(part)]
+            continue
         if not isinstance(node, dict):
             raise ConfigError(key, value, "a dotted path into the scene", f"'{'.'.join(parts[:i])}' is not a section")
         if part not in node:

@@ -83,6 +83,8 @@ def test_typo_of_a_required_scene_key_names_the_unknown_key_and_the_close_one(tm
     ("integrator=rk3", "did you mean rk2?"),
     ("fidelity=fastt", "did you mean fast?"),
     ("drop_height_m", "--set='drop_height_m': allowed KEY=VALUE"),
+    ("anchor.sections.9.length_m=5", "allowed an index 0 .. 4 of anchor.sections"),
+    ("catenary_line.fairlead_x_m=5", "it has no 'catenary_line' section"),
 ])
 def test_bad_set_names_the_key_and_suggests_the_nearest(capsys, no_run, item, words):
     line = _error_line(capsys, ["static", "gjoa-500", "--set", item])

@@ -110,6 +110,10 @@ def test_drop_height_limits_are_the_ones_the_consistency_check_applies():
     assert load_scene("gjoa-500", {"water_depth_m": 132.5}).environment.water_depth_m == 132.5
 
 
+def test_set_reaches_list_entries_by_index():
+    assert load_scene("gjoa-500", {"anchor.sections.0.length_m": 5.0}).anchor.sections[0].length_m == 5.0
+
+
 def test_set_key_help_has_every_shortcut_with_its_unit():
     lines = {line.split()[0]: line for line in set_key_help()}
     assert list(lines) == list(SET_SHORTCUTS)
