@@ -2,7 +2,8 @@
 
 ``make_baseline(name, env_id)`` builds one; :data:`BASELINES` lists the names.
 
-**Crew rule of thumb** (:class:`CrewPolicy`), from /work/shared/reference/seed-003-dart-anchor.md:
+**Crew rule of thumb** (:class:`CrewPolicy`), from seed 003 (Landhaug 2015, "Dynamic Simulation of Dart Anchor
+Installation"; sections as cited):
 
 * spacing about 0.1 x depth: "Default vessel spacing X_DIST = 0.1 h" (section 1.4), "use as low as possible
   X_DIST" and tilt risk beyond 0.3 h (sections 4.4, 5, 6 item 7). The crew moves the second vessel towards
@@ -13,8 +14,8 @@
   in training, 40/50 m held out), not an action; the crew policy refuses nothing but reports it in
   ``vertical_chain_ok``.
 * release when the anchor's heave velocity is near zero on a downswing: seed 003 has no waves but says "the
-  release instant is not arbitrary in waves" (section 6 item 5); the zero-velocity-at-the-crest timing is the
-  issue's crew rule. In ``AnchorRelease-v0`` the crew watches the release node's vertical velocity
+  release instant is not arbitrary in waves" (section 6 item 5); releasing at zero velocity at the crest is the
+  crew's rule of thumb. In ``AnchorRelease-v0`` the crew watches the release node's vertical velocity
   (observation ``release_node_vz_m_s``, the anchor hangs from it) and releases on the first step where it has
   turned from upwards to downwards, once positioned (at 0.1 h within 5 m, or after ``plan.positioning_s``),
   and at the latest 3 s before the time limit. In ``AnchorPlan-v0`` the wave reference is the installation
@@ -36,8 +37,9 @@ import gymnasium as gym
 import numpy as np
 
 from agents.policy import EpisodeContext, Policy
+from agents.success import episode_success
 from moor_env.envs.config import EnvConfig, load_env_config
-from moor_env.envs.core import OBS_NAMES, OBS_OFFSET, OBS_SCALE
+from moor_env.envs.observation import OBS_NAMES, OBS_OFFSET, OBS_SCALE
 from moor_env.errors import ConfigError
 
 PLAN_ENV = "moor_env/AnchorPlan-v0"
@@ -158,8 +160,6 @@ class OptimiserPolicy(Policy):
 
     def score(self, ctx: EpisodeContext, action: np.ndarray) -> float:
         """10 x success + reward of ``action`` replayed on the episode's scenario."""
-        from agents.evaluate import episode_success  # noqa: PLC0415 - evaluate imports this module
-
         if self._env is None:
             self._env = gym.make(PLAN_ENV, config=self.cfg)
         self._env.reset(seed=ctx.seed, options=ctx.scenario)

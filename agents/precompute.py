@@ -20,7 +20,8 @@ from tqdm import tqdm
 from agents.config import load_train_config, parse_set
 from agents.scenarios import held_out_scenarios
 from moor_env.envs.config import SCENARIO_RANGES, load_env_config
-from moor_env.envs.equilibria import DYNAMIC_ONLY_FIELDS, _solve_one, discrete_grid
+from moor_env.envs.equilibria import DYNAMIC_ONLY_FIELDS, discrete_grid
+from moor_env.envs.precompute import solve_grid_row
 
 STATICS_FIELDS = tuple(n for n in SCENARIO_RANGES if n not in DYNAMIC_ONLY_FIELDS)
 
@@ -49,9 +50,9 @@ def precompute(train_config, n_scenarios: int, jobs: int = 1, progress: bool = T
     bar = tqdm(total=len(rows), desc="equilibria", disable=not progress)
     if jobs > 1:
         with mp.get_context("fork").Pool(jobs) as pool:
-            results = list(_iter_bar(pool.imap(_solve_one, [(data, r) for r in rows]), bar))
+            results = list(_iter_bar(pool.imap(solve_grid_row, [(data, r) for r in rows]), bar))
     else:
-        results = list(_iter_bar((_solve_one((data, r)) for r in rows), bar))
+        results = list(_iter_bar((solve_grid_row((data, r)) for r in rows), bar))
     bar.close()
     for row, (origin, _) in zip(rows, results, strict=True):
         key = "failed" if origin.startswith("failed") else origin

@@ -1,4 +1,4 @@
-"""Gymnasium environments of the dart-anchor installation (issue 3).
+"""Gymnasium environments of the dart-anchor installation.
 
 * ``moor_env/AnchorRelease-v0`` (:class:`AnchorReleaseEnv`): sequential control of vessel spacing, mooring-line
   payout and the release moment; batched vector env :class:`AnchorReleaseVectorEnv`.
@@ -7,11 +7,13 @@
 Both are registered when ``moor_env`` is imported. Settings: ``configs/envs/*.yaml`` (:func:`load_env_config`).
 """
 
+from moor_env.envs.actuators import ACTION_NAMES
 from moor_env.envs.anchor_plan import AnchorPlanEnv
 from moor_env.envs.anchor_release import AnchorReleaseEnv
 from moor_env.envs.config import SCENARIO_FIELDS, EnvConfig, load_env_config
-from moor_env.envs.core import ACTION_NAMES, OBS_NAMES, OBS_SPEC, REWARD_TERMS
-from moor_env.envs.vector import AnchorReleaseVectorEnv
+from moor_env.envs.observation import OBS_NAMES, OBS_SPEC
+from moor_env.envs.reward import REWARD_TERMS
+from moor_env.envs.vector_env import AnchorReleaseVectorEnv
 
 __all__ = [
     "ACTION_NAMES",

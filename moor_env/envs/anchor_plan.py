@@ -10,9 +10,12 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from moor_env.envs.anchor_release import start_episode
 from moor_env.envs.config import EnvConfig, load_env_config
-from moor_env.envs.core import OBS_CLIP, OBS_NAMES, REWARD_TERMS, InstallationCore, run_advance
+from moor_env.envs.core import InstallationCore, run_advance
+from moor_env.envs.observation import OBS_CLIP, OBS_NAMES
+from moor_env.envs.render import FrameRenderer, snapshot
+from moor_env.envs.reward import REWARD_TERMS
+from moor_env.envs.scenario import start_episode
 from moor_env.physics.vessels import track_state
 
 PLAN_ACTION_NAMES: tuple[str, ...] = ("spacing_rate", "payout_rate", "release_delay")
@@ -91,7 +94,8 @@ class AnchorPlanEnv(gym.Env):
 
     ## Version History
 
-    * v0: initial version (issue 3).
+    * v0: 3 actions (spacing rate, payout rate, release delay), 27 observations, AnchorRelease-v0's 11 reward
+      terms summed over the plan.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 4}
@@ -157,7 +161,7 @@ class AnchorPlanEnv(gym.Env):
         if adv is not None and self.render_mode is not None:
             self._fall_snapshots = []
             run = run_advance(core, adv, cfg.render.fall_frame_interval_s,
-                              lambda: self._fall_snapshots.append(core.snapshot()))
+                              lambda: self._fall_snapshots.append(snapshot(core)))
         else:
             run = run_advance(core, adv) if adv is not None else (None, None)
         result = accumulate(core.finish_step(*run))
@@ -181,7 +185,7 @@ class AnchorPlanEnv(gym.Env):
         """The current state (``render_mode="rgb_array"``)."""
         if self.render_mode != "rgb_array" or not self._started:
             return None
-        return self._draw(self.core.snapshot())
+        return self._draw(snapshot(self.core))
 
     def fall_frames(self) -> list[np.ndarray]:
         """Frames of the last fall, one every ``render.fall_frame_interval_s``."""
@@ -189,8 +193,6 @@ class AnchorPlanEnv(gym.Env):
 
     def _draw(self, snap: dict) -> np.ndarray:
         if self._renderer is None:
-            from moor_env.envs.render import FrameRenderer  # noqa: PLC0415
-
             self._renderer = FrameRenderer(self.cfg.render.width_px, self.cfg.render.height_px)
         return self._renderer.draw(snap)
 

@@ -9,21 +9,14 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from moor_env.envs.actuators import ACTION_NAMES
 from moor_env.envs.config import EnvConfig, load_env_config
-from moor_env.envs.core import (
-    ACTION_NAMES,
-    OBS_CLIP,
-    OBS_NAMES,
-    PHASE_FALL,
-    REWARD_TERMS,
-    Advance,
-    InstallationCore,
-    draw_scenario,
-    run_advance,
-)
-from moor_env.errors import ConfigError, StaticsNotConverged
-
-MAX_SCENARIO_DRAWS = 10
+from moor_env.envs.core import InstallationCore, run_advance
+from moor_env.envs.observation import OBS_CLIP, OBS_NAMES
+from moor_env.envs.render import FrameRenderer, snapshot
+from moor_env.envs.reward import PHASE_FALL, REWARD_TERMS
+from moor_env.envs.scenario import start_episode
+from moor_env.errors import ConfigError
 
 
 def step_limit(cfg: EnvConfig, max_episode_steps: int | None) -> int:
@@ -32,22 +25,6 @@ def step_limit(cfg: EnvConfig, max_episode_steps: int | None) -> int:
     if max_episode_steps is not None:
         limit = min(limit, int(max_episode_steps))
     return limit
-
-
-def start_episode(core: InstallationCore, rng: np.random.Generator, options: dict[str, Any] | None) -> Advance | None:
-    """Draw a scenario (``options`` fix fields) and start the core on it; the warm-up to integrate, if any.
-
-    A drawn scenario without a valid scene or equilibrium is drawn again (up to ``MAX_SCENARIO_DRAWS`` times);
-    with ``options`` given the error is raised at once.
-    """
-    for attempt in range(MAX_SCENARIO_DRAWS):
-        scenario = draw_scenario(core.cfg, rng, options)
-        try:
-            return core.start(scenario)
-        except (ConfigError, StaticsNotConverged):
-            if options or attempt == MAX_SCENARIO_DRAWS - 1:
-                raise
-    raise AssertionError("unreachable")  # pragma: no cover
 
 
 def make_anchor_release(**kwargs: Any) -> gym.Env:
@@ -216,12 +193,9 @@ class AnchorReleaseEnv(gym.Env):
 
     ## Version History
 
-    * v0: initial version (issue 3): 3 actions, 27 observations, 11 reward terms. Since 2026-11-22 the fall's
-      resolution is fitted at the release rather than to the geometry the controls could reach (episodes on the
-      same seed differ from earlier ones by the resolution change). Since 2026-11-22 (later) ``info["touchdown"]``
-      also holds ``chain_past_back_end_m``, and in waves the scenes run the ``fast`` preset's tight_line resolution
-      with its ``in_waves`` keys (1 m loop chain at 11.25 ms instead of 0.5 m at 5.6 ms): waves episodes on the
-      same seed differ from earlier ones.
+    * v0: 3 actions, 27 observations, 11 reward terms; the fall's resolution is fitted at the release;
+      ``info["touchdown"]`` holds ``chain_past_back_end_m``; in waves the scenes run the ``fast`` preset's
+      tight_line resolution with its ``in_waves`` keys (1 m loop chain at 11.25 ms).
     """
 
     metadata = {"render_modes": ["human", "rgb_array", "rgb_array_list"], "render_fps": 4}
@@ -297,7 +271,7 @@ class AnchorReleaseEnv(gym.Env):
     def close(self):
         """Release the figure (and the window in human mode)."""
         if self._window is not None:
-            import matplotlib.pyplot as plt  # noqa: PLC0415
+            import matplotlib.pyplot as plt  # noqa: PLC0415 - matplotlib: only the human render mode opens a window
 
             plt.close(self._window[0])
             self._window = None
@@ -315,7 +289,7 @@ class AnchorReleaseEnv(gym.Env):
         return REWARD_TERMS
 
     def _draw(self) -> np.ndarray:
-        return self._renderer_draw(self.core.snapshot())
+        return self._renderer_draw(snapshot(self.core))
 
     def _record_frame(self) -> None:
         if self.render_mode == "rgb_array_list":
@@ -324,7 +298,7 @@ class AnchorReleaseEnv(gym.Env):
             self._show(self._draw())
 
     def _on_fall_chunk(self) -> None:
-        snap = self.core.snapshot()
+        snap = snapshot(self.core)
         self._fall_snapshots.append(snap)
         if self.render_mode == "rgb_array_list":
             self._frames.append(self._renderer_draw(snap))
@@ -333,12 +307,11 @@ class AnchorReleaseEnv(gym.Env):
 
     def _renderer_draw(self, snap: dict) -> np.ndarray:
         if self._renderer is None:
-            from moor_env.envs.render import FrameRenderer  # noqa: PLC0415
-
             self._renderer = FrameRenderer(self.cfg.render.width_px, self.cfg.render.height_px)
         return self._renderer.draw(snap)
 
     def _show(self, frame: np.ndarray) -> None:
+        # matplotlib's pyplot (a GUI backend where there is a display) loads only in the human render mode
         import matplotlib  # noqa: PLC0415
         import matplotlib.pyplot as plt  # noqa: PLC0415
 

@@ -6,11 +6,11 @@ array per argument of the physics entry point :func:`moor_env.physics.integrate.
 array's data address and shape. :func:`advance_many` rebuilds each array as a view on that memory
 (``numba.carray``) and calls ``advance`` for each scene in a loop, without the GIL.
 
-Why addresses: numba unboxes every array argument on every call, with the GIL held. The former signature (a
-tuple of 8 arrays per argument, 232 arrays) spent 56-75 us per call before the first step (measured with nothing
-to integrate), a fifth of a calm scene's control step; the kernel now takes four small arrays whatever the number
-of scenes, and the same one-scene call with nothing to integrate costs 16 us, most of it the load evaluation the
-kernel now does (below). The addresses stay valid because :class:`BatchAdvancer` keeps
+Why addresses: numba unboxes every array argument on every call, with the GIL held. Passed as arrays (a tuple
+of 8 arrays per argument, 232 arrays) they would cost 56-75 us per call before the first step (measured with
+nothing to integrate), a fifth of a calm scene's control step; the kernel takes four small arrays whatever the
+number of scenes, and a one-scene call with nothing to integrate costs 16 us, most of it the load evaluation the
+kernel does (below). The addresses stay valid because :class:`BatchAdvancer` keeps
 every listed array referenced while its entry is in use, checks dtype, rank and C layout when it builds an
 entry, and rebuilds the entry when the simulator's state object changes (the arrays of one state are never
 replaced; ``set_vessel_motion`` may replace the vessel tracks, whose row is refreshed on every call).
@@ -19,10 +19,10 @@ After each scene's advance the kernel evaluates the loads and the lines' top ten
 (unless it blew up), so the observation's tensions (``Simulator.top_tensions_n``) need no second kernel call and
 that work runs on the batch's threads. An env slot also passes :class:`SlotBuffers`: the kernel then writes the
 quantities its observation reads (``M_*``, :func:`measure_scene`) and, where the advance asks for it, first copies
-the state into a backup (the env repeats a diverged coarse pre-release advance from it). Both had been Python on
-every env step (a numpy copy of nine arrays, a dozen small kernel and numpy calls); with them moved here (and the
-observations normalised for all slots at once) the batched env's Python per slot and step went from about 68 to
-48 us (calm default scene, 16 slots, one thread, profiler off).
+the state into a backup (the env repeats a diverged coarse pre-release advance from it). Done in Python on every
+env step they cost a numpy copy of nine arrays and a dozen small kernel and numpy calls; done here (and with the
+observations normalised for all slots at once) the batched env's Python per slot and step is about 48 us rather
+than 68 us (calm default scene, 16 slots, one thread, profiler off).
 
 Why the single env goes through this kernel too (with one scene): LLVM optimises ``advance`` together with its
 caller (inlining, constant arguments), and with the kernels' fastmath ``contract`` flag the fused multiply-adds

@@ -1,7 +1,7 @@
 """Environment settings: ``configs/envs/*.yaml`` -> validated, frozen :class:`EnvConfig`.
 
 An env config names the scene it builds on (``scene: gjoa-500``), the fidelity overrides applied to every
-episode (a mapping of scene overrides, so that the fidelity presets of issue 4 can replace it), the control
+episode (a mapping of scene overrides, which a fidelity preset can stand in for), the control
 limits, the scenario distribution drawn at every reset, the reward weights, the one-shot plan settings, the
 equilibrium cache and rendering. Every value is SI with the unit in the key name (``_m``, ``_s``, ``_m_s``,
 ``_n``, ``_deg``); ``_over_depth`` values are fractions of the water depth.

@@ -18,18 +18,16 @@ decides the topology), so an edited solver or preset never returns stale states.
 solver's output bit for bit, so a cached and a fresh start give identical episodes.
 
 ``python -m moor_env.envs.precompute --config anchor-release --jobs 2`` solves every combination of a config's
-discrete scenario fields ahead of training.
+discrete scenario fields (:func:`discrete_grid`) ahead of training.
 """
 
 from __future__ import annotations
 
-import argparse
 import hashlib
 import io
 import itertools
 import json
 import os
-import sys
 import tempfile
 import time
 from collections import OrderedDict
@@ -39,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from moor_env.config import FIDELITY_PATH, scene_from_dict
-from moor_env.envs.config import SCENARIO_RANGES, EnvConfig, StaticsCacheConfig, _values, load_env_config
+from moor_env.envs.config import SCENARIO_RANGES, EnvConfig, StaticsCacheConfig, _values
 from moor_env.errors import StaticsNotConverged
 from moor_env.simulation import SimState, solve_statics
 
@@ -257,53 +255,3 @@ def discrete_grid(cfg: EnvConfig) -> list[dict[str, float]]:
             seen.add(k)
             unique.append(row)
     return unique
-
-
-def _solve_one(args: tuple[dict[str, Any], dict[str, float]]) -> tuple[str, float]:
-    from moor_env.envs.core import SceneFactory, representative_scenario  # noqa: PLC0415 - worker import
-
-    cfg_data, row = args
-    cfg = load_env_config(cfg_data)
-    factory = SceneFactory(cfg)
-    cache = EquilibriumCache(cfg.statics)
-    t0 = time.perf_counter()
-    scenario = {**representative_scenario(cfg), **row}
-    origins = []
-    # calm and wavy scenarios start from equilibria at different resolutions (SceneFactory.pre_release_resolution)
-    for hs_m in sorted(set(_values(cfg.scenario.sea_state_hs_m)) | {scenario["sea_state_hs_m"]}):
-        try:
-            origins.append(cache.state(factory.statics_data({**scenario, "sea_state_hs_m": hs_m}))[1])
-        except Exception as exc:  # noqa: BLE001 - report and go on with the grid
-            return f"failed: {exc}", time.perf_counter() - t0
-    return ", ".join(dict.fromkeys(origins)), time.perf_counter() - t0
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Solve and store the equilibria of every discrete scenario combination of a config."""
-    parser = argparse.ArgumentParser(prog="python -m moor_env.envs.precompute", description=main.__doc__)
-    parser.add_argument("--config", default="anchor-release", help="env config name or YAML path")
-    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="worker processes")
-    args = parser.parse_args(argv)
-    cfg = load_env_config(args.config)
-    if not cfg.statics.disk:
-        print("statics.disk is false: nothing would be kept", file=sys.stderr)
-        return 2
-    grid = discrete_grid(cfg)
-    print(f"{len(grid)} equilibria for config '{cfg.name}'")
-    data = cfg.model_dump()
-    t0 = time.perf_counter()
-    if args.jobs > 1:
-        import multiprocessing as mp  # noqa: PLC0415
-
-        with mp.get_context("spawn").Pool(args.jobs) as pool:
-            results = pool.imap(_solve_one, [(data, row) for row in grid])
-            for i, (origin, wall) in enumerate(results):
-                print(f"{i + 1}/{len(grid)} {grid[i]} {origin} {wall:.2f} s", flush=True)
-    else:
-        for i, row in enumerate(grid):
-            origin, wall = _solve_one((data, row))
-            print(f"{i + 1}/{len(grid)} {row} {origin} {wall:.2f} s", flush=True)
-    print(f"done in {time.perf_counter() - t0:.1f} s")
-    return 0
-
-

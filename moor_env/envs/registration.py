@@ -6,6 +6,8 @@ Each env is registered under the ``moor_env/`` namespace and, for ``gym.make("mo
 
 from __future__ import annotations
 
+from gymnasium.envs.registration import register, registry
+
 ENVS = {
     "AnchorRelease-v0": {
         # returns the env inside a TimeLimit of control.max_pre_release_s / control.interval_s steps (60 by
@@ -22,8 +24,6 @@ ENVS = {
 
 def register_envs() -> None:
     """Register every env id that is not registered yet (safe to call repeatedly)."""
-    from gymnasium.envs.registration import register, registry  # noqa: PLC0415
-
     for name, kwargs in ENVS.items():
         for env_id in (f"moor_env/{name}", name):
             if env_id not in registry:

@@ -1,5 +1,7 @@
 """Frames of the installation for ``render_mode="rgb_array"`` (matplotlib Agg, no display needed).
 
+:func:`snapshot` copies the geometry of a frame out of an episode slot; :class:`FrameRenderer` draws it.
+
 Left panel: the whole water column in the x-z plane (vertical exaggeration as needed): sea surface, seabed,
 both vessels (with their wave motion), the installation wire, the vertical chain, the mooring line (chain dark,
 fibre rope orange), the anchor and current arrows over depth. Right panel: a true-scale zoom on the anchor with
@@ -11,9 +13,10 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
-from matplotlib.patches import Polygon
+
+from moor_env.physics import layout as L
+from moor_env.physics.environment import current_velocity
+from moor_env.physics.vessels import track_state
 
 WATER = "#dceefb"
 SEABED = "#b49a6e"
@@ -23,8 +26,38 @@ FIBRE = "#e08a1e"
 ANCHOR = "#b0182b"
 
 
+def snapshot(core) -> dict[str, Any]:
+    """Geometry for a frame of an episode slot (:class:`~moor_env.envs.core.InstallationCore`; copies): line
+    polylines with materials, anchor, vessels, current."""
+    sim = core.sim
+    st = sim.state
+    m = sim.model
+    lines = {}
+    for name, idx in core.lines.items():
+        li = st.line_i[idx]
+        if not st.seg_i[li[L.LI_SEG_START], L.SI_ACTIVE]:
+            continue
+        segs = np.arange(li[L.LI_SEG_START], li[L.LI_SEG_START] + li[L.LI_NSEG])
+        nodes = np.concatenate([[st.seg_i[segs[0], L.SI_A]], st.seg_i[segs, L.SI_B]])
+        mats = [m.material_names[k] for k in st.seg_i[segs, L.SI_MAT]]
+        lines[name] = (st.node_pos[nodes].copy(), mats)
+    tip, vel = sim.tip_state()
+    vessels = []
+    for v in range(sim.vessel_mean_m.shape[0]):
+        x, y, z, *_ = track_state(sim.tracks, v, st.t, sim.env_f)
+        vessels.append((x, z))
+    profile = m.current_profile
+    depths = np.linspace(0.0, core.depth * 0.95, 6)
+    current = [(-d, *current_velocity(-d, sim.env_f, profile)[:2]) for d in depths]
+    return {"t_s": core.time_s, "depth_m": core.depth, "lines": lines, "tip": tip.copy(),
+            "back": sim.back_end_m(), "tip_speed_m_s": float(np.linalg.norm(vel)),
+            "tilt_deg": sim.tilt_deg(), "vessels": vessels, "current": current, "released": core.released,
+            "status": core.status, "chain_material": core.chain_material,
+            "fibre_material": m.material_names[core.fibre_mat], "hs_m": core.hs, "target_xy": core.target_xy}
+
+
 class FrameRenderer:
-    """Draws snapshots (:meth:`moor_env.envs.core.InstallationCore.snapshot`) into RGB arrays.
+    """Draws snapshots (:func:`snapshot`) into RGB arrays.
 
     Parameters
     ----------
@@ -33,6 +66,10 @@ class FrameRenderer:
     """
 
     def __init__(self, width_px: int = 720, height_px: int = 480) -> None:
+        # matplotlib (about 0.3 s to import) loads with the first renderer, not with the envs
+        from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: PLC0415
+        from matplotlib.figure import Figure  # noqa: PLC0415
+
         self.dpi = 100
         self.fig = Figure(figsize=(width_px / self.dpi, height_px / self.dpi), dpi=self.dpi)
         self.canvas = FigureCanvasAgg(self.fig)
@@ -69,6 +106,8 @@ class FrameRenderer:
                 ax.plot(x[k:k + 2], z[k:k + 2], color=color, lw=width, solid_capstyle="round", zorder=4)
 
     def _overview(self, ax, snap: dict[str, Any]) -> None:
+        from matplotlib.patches import Polygon  # noqa: PLC0415 - matplotlib loads with the first renderer
+
         depth = snap["depth_m"]
         xs = [v[0] for v in snap["vessels"]]
         for pos, _ in snap["lines"].values():
@@ -106,6 +145,8 @@ class FrameRenderer:
         ax.tick_params(labelsize=7)
 
     def _zoom(self, ax, snap: dict[str, Any]) -> None:
+        from matplotlib.patches import Polygon  # noqa: PLC0415 - matplotlib loads with the first renderer
+
         depth = snap["depth_m"]
         tip, back = snap["tip"], snap["back"]
         cx = 0.5 * (tip[0] + back[0])

@@ -1,6 +1,6 @@
 """The batched AnchorRelease-v0 vector env split over worker processes (``num_workers`` > 1).
 
-The in-process :class:`~moor_env.envs.vector.AnchorReleaseVectorEnv` runs its kernel on threads, but the
+The in-process :class:`~moor_env.envs.vector_env.AnchorReleaseVectorEnv` runs its kernel on threads, but the
 per-scene Python of every step (actions, observation, reward, info) runs on one core under the GIL; measured on
 the calm default scene it is about a third of the CPU per transition, and with it the threads gained little on
 two cores (benchmarks/bench_env.py). :class:`ShardedVectorEnv` splits the slots into ``num_workers`` contiguous
@@ -8,7 +8,7 @@ shards, each an ``AnchorReleaseVectorEnv`` with one kernel call per step, so bot
 on every core. The calling process steps the first shard itself while ``num_workers - 1`` worker processes step
 the others, so that no process waits idle for the rest. One message per worker per step carries the actions out
 and the shard's results back (a gymnasium ``AsyncVectorEnv`` sends one per scene); the infos travel as the
-slots' plain dicts and are merged here (:func:`~moor_env.envs.vector.merge_infos`), since numpy's layout costs
+slots' plain dicts and are merged here (:func:`~moor_env.envs.vector_infos.merge_infos`), since numpy's layout costs
 25x more to pickle.
 
 Why every process polls its pipe for ``spin_s`` before it blocks on it: on a virtual machine a process that
@@ -32,7 +32,8 @@ from typing import Any
 import numpy as np
 from gymnasium.vector import VectorEnv
 
-from moor_env.envs.vector import AnchorReleaseVectorEnv, init_vector_env, merge_infos
+from moor_env.envs.vector_env import AnchorReleaseVectorEnv, init_vector_env
+from moor_env.envs.vector_infos import merge_infos
 from moor_env.errors import ConfigError
 
 CLOSE_TIMEOUT_S = 10.0

@@ -13,7 +13,11 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
+
+import moor_env  # noqa: F401 - registers the envs
+from moor_env.config import parse_set_value
 
 DEFAULT_SCENARIO = {"water_depth_m": 500.0, "vessel_spacing_over_depth": 0.2, "mooring_line_length_over_depth": 1.08,
                     "current_scale": 1.0, "current_direction_deg": 0.0, "sea_state_hs_m": 1.5,
@@ -44,7 +48,7 @@ def record_episode(env, policy: str = "scripted", seed: int = 0, options: dict[s
 
 def write_gif(frames: list[np.ndarray], path: str | Path, fps: float = 8.0) -> Path:
     """Save frames as an animated GIF (Pillow, which matplotlib depends on)."""
-    from PIL import Image  # noqa: PLC0415
+    from PIL import Image  # noqa: PLC0415 - Pillow (a matplotlib dependency) loads only to write a GIF
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -55,11 +59,6 @@ def write_gif(frames: list[np.ndarray], path: str | Path, fps: float = 8.0) -> P
 
 def main(argv: list[str] | None = None) -> int:
     """Record one episode to a GIF."""
-    import gymnasium as gym  # noqa: PLC0415
-
-    import moor_env  # noqa: F401, PLC0415 - registers the envs
-    from moor_env.config import parse_set_value  # noqa: PLC0415
-
     parser = argparse.ArgumentParser(prog="python -m moor_env.envs.video", description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="docs/env-episode.gif", help="GIF path")
     parser.add_argument("--frame", default=None, help="also save one frame of the fall as PNG")
@@ -82,7 +81,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{path}: {len(frames)} frames, {info['sim_status']}"
           + (f", {td['speed_m_s']:.2f} m/s, tilt {td['tilt_deg']:.2f} deg" if td else ""))
     if args.frame:
-        from PIL import Image  # noqa: PLC0415
+        from PIL import Image  # noqa: PLC0415 - Pillow loads only to write the still frame
 
         fall = [f for f in frames[-12:]]
         pick = fall[len(fall) // 2] if fall else frames[-1]

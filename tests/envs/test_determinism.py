@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from moor_env.envs import equilibria, load_env_config
-from moor_env.envs.core import SceneFactory, representative_scenario
+from moor_env.envs.scenario import representative_scenario
+from moor_env.envs.scene import SceneFactory
 from moor_env.errors import StaticsNotConverged
 
 

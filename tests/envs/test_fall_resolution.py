@@ -17,7 +17,8 @@ import pytest
 
 from moor_env.config import fidelity_presets
 from moor_env.envs import load_env_config
-from moor_env.envs.core import SceneFactory, representative_scenario
+from moor_env.envs.scenario import representative_scenario
+from moor_env.envs.scene import SceneFactory
 from moor_env.physics.integrate import INTEGRATOR_SYMPLECTIC_EULER
 from moor_env.physics.stability import stable_time_step
 
@@ -96,7 +97,7 @@ def test_fall_resolution_thresholds_and_explicit_keys():
 
 
 def test_a_refused_remesh_keeps_the_preset_resolution_and_says_why(env, monkeypatch):
-    import moor_env.envs.core as core_module
+    import moor_env.envs.resolution as core_module
 
     def refuse(state, source, target):
         raise ValueError("line 'mooring_line' needs 999 segments")

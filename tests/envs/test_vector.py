@@ -8,7 +8,8 @@ import pytest
 
 from moor_env.compile import compile_scene
 from moor_env.envs import AnchorReleaseVectorEnv
-from moor_env.envs.core import InstallationCore, draw_scenario
+from moor_env.envs.core import InstallationCore
+from moor_env.envs.scenario import draw_scenario
 
 
 def _actions(n_envs, n_steps, seed=0):
@@ -104,7 +105,7 @@ def test_derived_model_equals_compiled(tiny, fall):
 def test_merge_infos_equals_gymnasium_add_info(tiny):
     """The batched env's one-pass info merge against Gymnasium's env-by-env ``_add_info`` on real step, touchdown
     and reset infos (keys present in some envs only, nested dicts, strings, bools, floats)."""
-    from moor_env.envs.vector import _same_layout, merge_infos
+    from moor_env.envs.vector_infos import _same_layout, merge_infos
 
     env = gym.make("moor_env/AnchorRelease-v0", config="tiny", overrides=tiny)
     infos = [env.reset(seed=0)[1]]

@@ -1,0 +1,96 @@
+"""The scenario distribution: what varies from one episode to the next, and how a scenario is drawn.
+
+A scenario is a mapping of every field of :data:`~moor_env.envs.config.SCENARIO_FIELDS` to a value (depth,
+spacing, line length, current, sea state and its seed, chain drag, anchor mass scale). The config's ``scenario``
+section gives each field a constant, a choice or a uniform range; ``reset(options=...)`` fixes fields by name.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from moor_env.envs.config import SCENARIO_FIELDS, SCENARIO_RANGES, SEED_FIELD, SEED_HIGH, Choice, EnvConfig, Uniform
+from moor_env.errors import ConfigError, StaticsNotConverged
+
+MAX_SCENARIO_DRAWS = 10
+
+
+def representative_scenario(cfg: EnvConfig) -> dict[str, Any]:
+    """First value of every scenario distribution (constant, first choice, lower uniform bound); seed 0."""
+    out: dict[str, Any] = {}
+    for name in SCENARIO_FIELDS:
+        dist = getattr(cfg.scenario, name)
+        if name == SEED_FIELD:
+            out[name] = 0 if dist == "draw" else int(dist)
+        elif isinstance(dist, Choice):
+            out[name] = float(dist.choice[0])
+        elif isinstance(dist, Uniform):
+            out[name] = float(dist.uniform[0])
+        else:
+            out[name] = float(dist)
+    return out
+
+
+def _draw(dist, rng: np.random.Generator) -> float:
+    if isinstance(dist, Choice):
+        return float(dist.choice[int(rng.integers(len(dist.choice)))])
+    if isinstance(dist, Uniform):
+        lo, hi = dist.uniform
+        return float(rng.uniform(lo, hi))
+    return float(dist)
+
+
+def draw_scenario(cfg: EnvConfig, rng: np.random.Generator, options: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Draw a scenario from the config's distribution; ``options`` fixes fields.
+
+    Every field is drawn (in the fixed order of :data:`SCENARIO_FIELDS`) even when ``options`` fixes it, so that
+    fixing one field leaves the draws of the others unchanged for a given seed.
+
+    Raises
+    ------
+    ConfigError
+        For an unknown option key or a value outside the field's range.
+    """
+    scenario: dict[str, Any] = {}
+    for name in SCENARIO_FIELDS:
+        if name == SEED_FIELD:
+            dist = cfg.scenario.sea_state_seed
+            scenario[name] = int(rng.integers(0, SEED_HIGH + 1)) if dist == "draw" else int(dist)
+        else:
+            scenario[name] = _draw(getattr(cfg.scenario, name), rng)
+    for key, value in (options or {}).items():
+        if key not in SCENARIO_FIELDS:
+            raise ConfigError(f"options.{key}", value, "a scenario field: " + ", ".join(SCENARIO_FIELDS))
+        if key == SEED_FIELD:
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 <= value <= SEED_HIGH:
+                raise ConfigError(f"options.{key}", value, f"an integer 0 .. {SEED_HIGH}")
+            scenario[key] = int(value)
+            continue
+        lo, hi = SCENARIO_RANGES[key]
+        try:
+            v = float(value)
+        except (TypeError, ValueError):
+            raise ConfigError(f"options.{key}", value, "a number") from None
+        if not (lo <= v <= hi):
+            raise ConfigError(f"options.{key}", value, f"{lo} .. {hi}")
+        scenario[key] = v
+    return scenario
+
+
+def start_episode(core, rng: np.random.Generator, options: dict[str, Any] | None):
+    """Draw a scenario (``options`` fix fields) and start the episode slot ``core``
+    (:class:`~moor_env.envs.core.InstallationCore`) on it; the warm-up advance to integrate, if any.
+
+    A drawn scenario without a valid scene or equilibrium is drawn again (up to ``MAX_SCENARIO_DRAWS`` times);
+    with ``options`` given the error is raised at once.
+    """
+    for attempt in range(MAX_SCENARIO_DRAWS):
+        scenario = draw_scenario(core.cfg, rng, options)
+        try:
+            return core.start(scenario)
+        except (ConfigError, StaticsNotConverged):
+            if options or attempt == MAX_SCENARIO_DRAWS - 1:
+                raise
+    raise AssertionError("unreachable")  # pragma: no cover
