@@ -2,8 +2,9 @@
 
 Python::
 
-    from agents.evaluate import evaluate_policy, load_run, summarize, markdown_table
+    from agents.evaluate import evaluate_policy, summarize, markdown_table
     from agents.baselines import make_baseline
+    from agents.runs import load_run
     from agents.scenarios import held_out_scenarios
 
     scenarios = held_out_scenarios(12)
@@ -23,9 +24,9 @@ chain had fallen past the anchor's back end, which the model has no contact to s
 rest on an unmodelled part of the fall: README "Accuracy of the fall"). Several results of one policy trained with
 different seeds combine with :func:`combine_seeds` (t-interval over the seeds' means).
 
-**Success** (:func:`success_of`): touchdown with tilt below ``SUCCESS_TILT_DEG`` (2 deg, the Gjoa result; the DPA
-criterion is 5 deg) and speed at or above the env config's ``reward.required_speed_m_s`` (24 m/s), and no limit
-exceeded: no line above its MBL, the release unit's rating not exceeded, no fibre on the seabed (the
+**Success** (:func:`agents.success.success_of`): touchdown with tilt below ``SUCCESS_TILT_DEG`` (2 deg, the Gjoa
+result; the DPA criterion is 5 deg) and speed at or above the env config's ``reward.required_speed_m_s`` (24 m/s),
+and no limit exceeded: no line above its MBL, the release unit's rating not exceeded, no fibre on the seabed (the
 ``tension``, ``release_unit`` and ``fibre_seabed`` reward terms of the episode are all zero).
 """
 
@@ -46,34 +47,20 @@ from tqdm import tqdm
 
 import moor_env  # noqa: F401 - registers the envs
 from agents.baselines import BASELINES, PLAN_ENV, RELEASE_ENV, make_baseline
-from agents.io import write_json_atomic, write_text_atomic
+from agents.io import write_atomic, write_json_atomic, write_text_atomic
 from agents.policy import EpisodeContext, Policy
 from agents.scenarios import DEFAULT_COUNT, held_out_scenarios, load_scenarios
+from agents.success import LIMIT_TERMS, SUCCESS_TILT_DEG, success_of
+from agents.train_rllib import load_run_policies
 from moor_env.envs.config import EnvConfig, load_env_config
 from moor_env.errors import ConfigError, StaticsNotConverged
 
-SUCCESS_TILT_DEG = 2.0
-LIMIT_TERMS = ("tension", "release_unit", "fibre_seabed")
 CONFIDENCE = 0.95
 BOOTSTRAP_SAMPLES = 2000
 ENV_ALIASES = {"plan": PLAN_ENV, "release": RELEASE_ENV}
 
 
 # --- episodes ----------------------------------------------------------------------------------------------------
-def success_of(touchdown: dict[str, Any] | None, terms: dict[str, float], cfg: EnvConfig) -> bool:
-    """Success of one episode from its touchdown record and its summed reward terms (module docstring)."""
-    if not touchdown:
-        return False
-    limits_ok = all(terms.get(k, 0.0) == 0.0 for k in LIMIT_TERMS)
-    return bool(touchdown["tilt_deg"] < SUCCESS_TILT_DEG
-                and touchdown["speed_m_s"] >= cfg.reward.required_speed_m_s and limits_ok)
-
-
-def episode_success(info: dict[str, Any], cfg: EnvConfig) -> bool:
-    """Success of a one-step episode (``AnchorPlan-v0``, whose final info sums the reward terms)."""
-    return success_of(info.get("touchdown"), info["reward_terms"], cfg)
-
-
 def run_episode(env: gym.Env, policy: Policy, scenario: dict[str, Any], env_id: str, cfg: EnvConfig) -> dict:
     """Run ``policy`` on one scenario to the episode's end; returns the episode record."""
     t0 = time.perf_counter()
@@ -131,7 +118,7 @@ _WORKER: dict[str, Any] = {}
 
 def _worker_init(policy: Policy, env_id: str, cfg: EnvConfig) -> None:
     try:
-        import torch  # noqa: PLC0415
+        import torch  # noqa: PLC0415 - torch (optional): one thread per worker where it is installed
 
         torch.set_num_threads(1)
     except ImportError:  # pragma: no cover - torch comes with the rl extra
@@ -152,7 +139,7 @@ def evaluate_policy(policy: Policy, scenarios: list[dict[str, Any]], env_id: str
     Parameters
     ----------
     policy : Policy
-        A baseline (:func:`agents.baselines.make_baseline`) or a trained run (:func:`load_run`).
+        A baseline (:func:`agents.baselines.make_baseline`) or a trained run (:func:`agents.runs.load_run`).
     scenarios : list of dict
         ``{id, seed, options}`` mappings (:func:`agents.scenarios.held_out_scenarios`).
     env_id, env_config :
@@ -202,7 +189,7 @@ def bootstrap_ci(values: np.ndarray, seed: int = 0, samples: int = BOOTSTRAP_SAM
 
 def t_interval(values: np.ndarray) -> tuple[float, float]:
     """Student-t 95 % interval of the mean (over training seeds); a single value gives (v, v)."""
-    from scipy import stats  # noqa: PLC0415
+    from scipy import stats  # noqa: PLC0415 - scipy.stats takes about 0.5 s to import; only this needs it
 
     v = np.asarray(values, dtype=np.float64)
     v = v[np.isfinite(v)]
@@ -240,7 +227,7 @@ def summarize(episodes: list[dict[str, Any]]) -> dict[str, Any]:
         "tilt_deg": _stats(col["tilt_deg"]),
         "reward": {**_stats(col["reward"]), "ci": bootstrap_ci(col["reward"])},
         "limits_exceeded": limits,
-        # records from before the key existed count as not inside
+        # records without the key count as not inside
         "chain_inside": int(sum(e.get("chain_past_back_end_m", math.nan) > 0.0 for e in episodes)),
     }
 
@@ -289,7 +276,7 @@ def markdown_table(results: list[dict[str, Any]]) -> str:
 
 def plot_distributions(results: list[dict[str, Any]], path: str | Path, required_speed_m_s: float = 24.0) -> Path:
     """Touchdown speed and tilt per policy (box plots over the scenarios, points on top) with the thresholds."""
-    import matplotlib  # noqa: PLC0415
+    import matplotlib  # noqa: PLC0415 - matplotlib loads only to draw a figure
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # noqa: PLC0415
@@ -317,15 +304,13 @@ def plot_distributions(results: list[dict[str, Any]], path: str | Path, required
 
 
 def _save_figure(fig: Any, path: str | Path) -> Path:
-    from agents.io import write_atomic  # noqa: PLC0415
-
     return write_atomic(path, lambda tmp: fig.savefig(tmp, dpi=110, format=Path(path).suffix.lstrip(".")))
 
 
 def render_episode(policy: Policy, scenario: dict[str, Any], path: str | Path, env_id: str = PLAN_ENV,
                    env_config: str | dict | EnvConfig = "anchor-release") -> dict[str, Any]:
     """Run one episode with ``render_mode="rgb_array"`` and save three frames (hanging, mid-fall, touchdown)."""
-    import matplotlib  # noqa: PLC0415
+    import matplotlib  # noqa: PLC0415 - matplotlib loads only to draw a figure
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # noqa: PLC0415
@@ -355,36 +340,11 @@ def render_episode(policy: Policy, scenario: dict[str, Any], path: str | Path, e
     return record
 
 
-# --- trained runs ----------------------------------------------------------------------------------------------------
-def load_run(run_dir: str | Path, checkpoint: str = "final"):
-    """Load one trained run directory (``runs/<name>/seed-<k>``) as a :class:`agents.train.RunPolicy`.
-
-    ``checkpoint``: ``final`` (``model.zip``), ``best`` (the evaluation callback's best) or ``last`` (the newest
-    checkpoint; what ``--resume`` continues from).
-    """
-    from agents.train import RunPolicy  # noqa: PLC0415 - keeps torch out of baseline-only evaluations
-
-    return RunPolicy.load(run_dir, checkpoint)
-
-
-def run_dirs(path: str | Path) -> list[Path]:
-    """A run directory itself, or the ``seed-*`` run directories below an experiment directory."""
-    path = Path(path)
-    if (path / "config.yaml").is_file():
-        return [path]
-    seeds = sorted(p for p in path.glob("seed-*") if (p / "config.yaml").is_file())
-    if not seeds:
-        raise ConfigError("run_dir", str(path), "a run directory (with config.yaml) or one holding seed-*/ runs")
-    return seeds
-
-
 # --- command line -----------------------------------------------------------------------------------------------------
 def evaluate_targets(targets: list[str], scenarios: list[dict[str, Any]], env: str | None = None,
                      env_config: str = "anchor-release", n_jobs: int = 1, progress: bool = True,
                      optimiser: dict[str, int] | None = None, checkpoint: str = "final") -> list[dict[str, Any]]:
     """Evaluate run directories and baseline names; baselines run on ``env`` or else on the first run's env."""
-    from agents.train_rllib import load_run_policies  # noqa: PLC0415 - it imports this module
-
     runs = [(t, load_run_policies(t, checkpoint)) for t in targets if t not in BASELINES]
     results = []
     env_id = ENV_ALIASES.get(env, env) if env else (runs[0][1][0].env_id if runs else PLAN_ENV)
@@ -450,8 +410,6 @@ def main(argv: list[str] | None = None) -> int:
     write_report(results, args.out, scenarios, {"argv": sys.argv[1:] if argv is None else argv})
     if args.render:
         first = args.targets[0]
-        from agents.train_rllib import load_run_policies  # noqa: PLC0415 - it imports this module
-
         policy = (make_baseline(first, results[0]["env_id"]) if first in BASELINES
                   else load_run_policies(first, args.checkpoint)[0])
         render_episode(policy, scenarios[0], Path(args.out) / "episode.png", results[0]["env_id"],

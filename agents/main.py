@@ -17,8 +17,10 @@ from pathlib import Path
 
 from agents.baselines import is_plan_env
 from agents.config import load_train_config, parse_set
-from agents.evaluate import evaluate_targets, load_run, markdown_table, render_episode, write_report
+from agents.evaluate import evaluate_targets, markdown_table, render_episode, write_report
+from agents.runs import load_run
 from agents.scenarios import held_out_scenarios, load_scenarios
+from agents.train import train
 from moor_env.errors import ConfigError
 
 MAIN_SCENARIOS = 12
@@ -39,8 +41,6 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> int:
     """Train, evaluate, report."""
-    from agents.train import train  # noqa: PLC0415
-
     args = parse_args(argv)
     t0 = time.perf_counter()
     try:

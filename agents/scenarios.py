@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from agents.io import write_text_atomic
 from moor_env.envs import SCENARIO_FIELDS
 from moor_env.errors import ConfigError
 
@@ -125,6 +126,4 @@ def load_scenarios(path: str | Path) -> list[dict[str, Any]]:
 
 def save_scenarios(scenarios: list[dict[str, Any]], path: str | Path) -> None:
     """Write a scenario list as JSON (atomically)."""
-    from agents.io import write_text_atomic  # noqa: PLC0415
-
     write_text_atomic(path, json.dumps({"scenarios": scenarios}, indent=1))

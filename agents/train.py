@@ -14,6 +14,9 @@ One run directory per seed, ``<out_dir>/<name>/seed-<seed>/``:
 
 Every file is written to a temporary name in its folder and moved into place (``os.replace``), and a checkpoint's
 pointer is written after its files, so an interrupted run loses nothing it had saved.
+
+stable-baselines3 and torch (the optional ``rl`` extra) are imported inside the functions that use them, so that
+importing this module (and :mod:`agents.main`) needs neither.
 """
 
 from __future__ import annotations
@@ -22,9 +25,7 @@ import argparse
 import json
 import math
 import os
-import platform
 import shutil
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -38,94 +39,13 @@ import moor_env
 from agents.config import TrainConfig, load_train_config, parse_set
 from agents.evaluate import evaluate_policy
 from agents.io import write_atomic, write_json_atomic, write_yaml_atomic
-from agents.policy import Policy
+from agents.runs import ObsNormalizer, RunPolicy, algo_class, git_state, latest_checkpoint, versions
 from moor_env.envs.config import EnvConfig, load_env_config
+from moor_env.envs.scene import SceneFactory
 from moor_env.errors import ConfigError
-
-REPO_ROOT = Path(__file__).resolve().parent.parent
-
-
-# --- policies of trained runs ---------------------------------------------------------------------------------------
-class ObsNormalizer:
-    """VecNormalize's observation transform from its saved statistics (JSON, no pickle needed to evaluate)."""
-
-    def __init__(self, mean: np.ndarray | None, var: np.ndarray | None, clip_obs: float, epsilon: float) -> None:
-        self.mean = None if mean is None else np.asarray(mean, dtype=np.float64)
-        self.var = None if var is None else np.asarray(var, dtype=np.float64)
-        self.clip_obs, self.epsilon = clip_obs, epsilon
-
-    def __call__(self, obs: np.ndarray) -> np.ndarray:
-        """Normalised observation (identity without statistics)."""
-        if self.mean is None:
-            return np.asarray(obs, dtype=np.float32)
-        z = (np.asarray(obs, dtype=np.float64) - self.mean) / np.sqrt(self.var + self.epsilon)
-        return np.clip(z, -self.clip_obs, self.clip_obs).astype(np.float32)
-
-    @classmethod
-    def from_vecnormalize(cls, venv: Any) -> ObsNormalizer:
-        """From a live ``VecNormalize`` (or identity for any other VecEnv)."""
-        from stable_baselines3.common.vec_env import VecNormalize  # noqa: PLC0415
-
-        if not isinstance(venv, VecNormalize) or not venv.norm_obs:
-            return cls(None, None, math.inf, 0.0)
-        return cls(venv.obs_rms.mean.copy(), venv.obs_rms.var.copy(), venv.clip_obs, venv.epsilon)
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON form (``vecnormalize.json``)."""
-        return {"mean": None if self.mean is None else self.mean.tolist(),
-                "var": None if self.var is None else self.var.tolist(),
-                "clip_obs": None if math.isinf(self.clip_obs) else self.clip_obs, "epsilon": self.epsilon}
-
-    @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> ObsNormalizer:
-        """Inverse of :meth:`to_dict`."""
-        return cls(d["mean"], d["var"], math.inf if d["clip_obs"] is None else d["clip_obs"], d["epsilon"])
-
-
-class RunPolicy(Policy):
-    """A trained SB3 model acting deterministically on normalised observations.
-
-    Attributes: ``model`` (the SB3 algorithm), ``normalizer``, ``env_id``, ``env_config`` (:class:`EnvConfig`),
-    ``name``, ``run_dir``.
-    """
-
-    def __init__(self, model: Any, normalizer: ObsNormalizer, env_id: str, env_config: EnvConfig, name: str,
-                 run_dir: Path | None = None) -> None:
-        self.model, self.normalizer = model, normalizer
-        self.env_id, self.env_config, self.name, self.run_dir = env_id, env_config, name, run_dir
-
-    def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
-        """The model's deterministic action."""
-        action, _ = self.model.predict(self.normalizer(obs), deterministic=True)
-        return np.asarray(action, dtype=np.float32)
-
-    @classmethod
-    def load(cls, run_dir: str | Path, checkpoint: str = "final") -> RunPolicy:
-        """Load ``final`` (``model.zip``), ``best`` or ``last`` (newest checkpoint) of a run directory."""
-        run_dir = Path(run_dir)
-        cfg = load_train_config(run_dir / "config.yaml")
-        env_cfg = load_env_config(run_dir / "env_config.yaml")
-        where = {"final": run_dir, "best": run_dir / "best"}.get(checkpoint)
-        if checkpoint == "last":
-            where = latest_checkpoint(run_dir)
-        if where is None or not (where / "model.zip").is_file():
-            raise ConfigError("checkpoint", f"{run_dir}:{checkpoint}", "final, best or last of a saved run",
-                              "no model.zip there (training unfinished? try --checkpoint last)")
-        model = algo_class(cfg.algo).load(where / "model.zip", device="cpu")
-        norm_path = where / "vecnormalize.json"
-        normalizer = (ObsNormalizer.from_dict(json.loads(norm_path.read_text())) if norm_path.is_file()
-                      else ObsNormalizer(None, None, math.inf, 0.0))
-        return cls(model, normalizer, cfg.env.id, env_cfg, f"{cfg.name}/{run_dir.name}", run_dir)
 
 
 # --- environments -------------------------------------------------------------------------------------------------
-def algo_class(algo: str):
-    """The SB3 class of ``ppo``, ``sac`` or ``td3``."""
-    from stable_baselines3 import PPO, SAC, TD3  # noqa: PLC0415
-
-    return {"ppo": PPO, "sac": SAC, "td3": TD3}[algo]
-
-
 class _MakeEnv:
     """Picklable env factory for SubprocVecEnv workers."""
 
@@ -133,19 +53,17 @@ class _MakeEnv:
         self.env_id, self.env_config = env_id, env_config
 
     def __call__(self) -> gym.Env:
-        from stable_baselines3.common.monitor import Monitor  # noqa: PLC0415
-
-        import moor_env  # noqa: F401, PLC0415 - registers the envs in a fresh worker process
+        from stable_baselines3.common.monitor import Monitor  # noqa: PLC0415 - stable_baselines3 (optional)
 
         return Monitor(gym.make(self.env_id, config=self.env_config))
 
 
 def make_vec_env(cfg: TrainConfig, env_cfg: EnvConfig):
     """The training VecEnv: subprocess workers, in-process (dummy) or the native batched env."""
-    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecMonitor  # noqa: PLC0415
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecMonitor  # noqa: PLC0415 - stable_baselines3 (optional)
 
     if cfg.vec_env == "batched":
-        from agents.vec_adapter import GymnasiumVecEnvAdapter  # noqa: PLC0415
+        from agents.vec_adapter import GymnasiumVecEnvAdapter  # noqa: PLC0415 - subclasses stable_baselines3's VecEnv
 
         vec = gym.make_vec(cfg.env.id, cfg.n_envs, vectorization_mode="vector_entry_point", config=env_cfg)
         return VecMonitor(GymnasiumVecEnvAdapter(vec))
@@ -157,7 +75,7 @@ def make_vec_env(cfg: TrainConfig, env_cfg: EnvConfig):
 
 def wrap_normalize(venv: Any, cfg: TrainConfig, gamma: float):
     """VecNormalize when the config asks for it."""
-    from stable_baselines3.common.vec_env import VecNormalize  # noqa: PLC0415
+    from stable_baselines3.common.vec_env import VecNormalize  # noqa: PLC0415 - stable_baselines3 (optional)
 
     if not (cfg.normalize.obs or cfg.normalize.reward):
         return venv
@@ -167,8 +85,8 @@ def wrap_normalize(venv: Any, cfg: TrainConfig, gamma: float):
 
 def build_model(cfg: TrainConfig, venv: Any, seed: int, tb_dir: Path | None):
     """A fresh SB3 model from the validated hyperparameters."""
-    import torch  # noqa: PLC0415
-    from stable_baselines3.common.noise import NormalActionNoise  # noqa: PLC0415
+    import torch  # noqa: PLC0415 - torch (optional)
+    from stable_baselines3.common.noise import NormalActionNoise  # noqa: PLC0415 - stable_baselines3 (optional)
 
     params = cfg.algo_params().model_dump()
     if cfg.algo == "td3":
@@ -183,41 +101,8 @@ def build_model(cfg: TrainConfig, venv: Any, seed: int, tb_dir: Path | None):
 
 
 # --- run directory ---------------------------------------------------------------------------------------------------
-def git_state() -> dict[str, Any]:
-    """Commit hash of the source tree and whether it had uncommitted changes (None outside a git checkout)."""
-    try:
-        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=REPO_ROOT, capture_output=True, text=True,
-                                timeout=10, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=REPO_ROOT,
-                               capture_output=True, text=True, timeout=10, check=True).stdout.strip() != ""
-        return {"git_commit": commit, "git_dirty": dirty}
-    except (OSError, subprocess.SubprocessError):
-        return {"git_commit": None, "git_dirty": None}
-
-
-def versions() -> dict[str, str]:
-    """Versions of the package and the libraries a run depends on."""
-    import stable_baselines3  # noqa: PLC0415
-    import torch  # noqa: PLC0415
-
-    return {"moor_env": moor_env.__version__ if hasattr(moor_env, "__version__") else _dist_version(),
-            "stable_baselines3": stable_baselines3.__version__, "torch": torch.__version__,
-            "gymnasium": gym.__version__, "numpy": np.__version__, "python": platform.python_version()}
-
-
-def _dist_version() -> str:
-    from importlib.metadata import PackageNotFoundError, version  # noqa: PLC0415
-
-    try:
-        return version("moor_env")
-    except PackageNotFoundError:  # pragma: no cover - running from a source tree without install
-        return "unknown"
-
-
 def write_run_files(run_dir: Path, cfg: TrainConfig, env_cfg: EnvConfig, seed: int) -> dict[str, Any]:
     """Resolved config, env config, scene and metadata of a new run."""
-    from moor_env.envs.core import SceneFactory  # noqa: PLC0415
-
     write_yaml_atomic(run_dir / "config.yaml", cfg.model_dump(mode="json"))
     write_yaml_atomic(run_dir / "env_config.yaml", env_cfg.model_dump(mode="json"))
     write_yaml_atomic(run_dir / "scene.yaml", SceneFactory(env_cfg).base)
@@ -230,7 +115,7 @@ def write_run_files(run_dir: Path, cfg: TrainConfig, env_cfg: EnvConfig, seed: i
 
 def save_model_files(folder: Path, model: Any, venv: Any, replay_buffer: bool) -> None:
     """Model, normalisation statistics (JSON and VecNormalize pickle) and the replay buffer, each atomically."""
-    from stable_baselines3.common.vec_env import VecNormalize  # noqa: PLC0415
+    from stable_baselines3.common.vec_env import VecNormalize  # noqa: PLC0415 - stable_baselines3 (optional)
 
     folder.mkdir(parents=True, exist_ok=True)
     write_atomic(folder / "model.zip", lambda tmp: model.save(tmp))
@@ -241,19 +126,10 @@ def save_model_files(folder: Path, model: Any, venv: Any, replay_buffer: bool) -
         write_atomic(folder / "replay_buffer.pkl", lambda tmp: model.save_replay_buffer(tmp))
 
 
-def latest_checkpoint(run_dir: Path) -> Path | None:
-    """The checkpoint folder ``checkpoints/latest.json`` names, if complete."""
-    pointer = run_dir / "checkpoints" / "latest.json"
-    if not pointer.is_file():
-        return None
-    folder = run_dir / "checkpoints" / json.loads(pointer.read_text())["folder"]
-    return folder if (folder / "model.zip").is_file() else None
-
-
 # --- callbacks --------------------------------------------------------------------------------------------------------
 def _callbacks(cfg: TrainConfig, run_dir: Path, venv: Any, env_cfg: EnvConfig, meta: dict[str, Any],
                t_start: float, wall_before_s: float):
-    from stable_baselines3.common.callbacks import BaseCallback  # noqa: PLC0415
+    from stable_baselines3.common.callbacks import BaseCallback  # noqa: PLC0415 - stable_baselines3 (optional)
 
     class CheckpointCallback(BaseCallback):
         """Every ``checkpoint.freq_steps``: save model, statistics and buffer, then move the pointer."""
@@ -350,8 +226,8 @@ def save_checkpoint(run_dir: Path, model: Any, venv: Any, cfg: TrainConfig, meta
 # --- training ---------------------------------------------------------------------------------------------------------
 def train_seed(cfg: TrainConfig, seed: int, resume: bool = False) -> Path:
     """Train (or resume) one seed; returns its run directory."""
-    import torch  # noqa: PLC0415
-    from stable_baselines3.common.vec_env import VecNormalize  # noqa: PLC0415
+    import torch  # noqa: PLC0415 - torch (optional)
+    from stable_baselines3.common.vec_env import VecNormalize  # noqa: PLC0415 - stable_baselines3 (optional)
 
     torch.set_num_threads(cfg.torch_threads)
     run_dir = Path(cfg.out_dir) / cfg.name / f"seed-{seed}"

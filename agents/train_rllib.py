@@ -4,7 +4,8 @@
 
 The config is YAML data validated by :class:`RllibConfig` (errors name the dotted key). The env is registered for
 the Ray workers with ``tune.register_env`` under :data:`RLLIB_ENV_NAME`; its creator (:func:`make_rllib_env`)
-imports ``moor_env`` inside the worker process, so every worker builds its own env from the env config.
+runs inside each worker process (which imports this module and with it ``moor_env``, registering the env ids),
+so every worker builds its own env from the env config.
 
 Ray: with no address (config ``ray.address``, ``--address`` or the ``RAY_ADDRESS`` variable) a local instance is
 started on this machine (``ray.num_cpus`` CPUs); with one, the run joins that cluster (``ray start --head`` on
@@ -20,6 +21,7 @@ Run directory ``<out_dir>/<name>/seed-<seed>/``: ``rllib_config.yaml`` (resolved
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import shutil
@@ -28,13 +30,16 @@ import time
 from pathlib import Path
 from typing import Any, Literal
 
+import gymnasium as gym
 import numpy as np
 from pydantic import Field, model_validator
 from tqdm import tqdm
 
+import moor_env  # noqa: F401 - registers the env ids (also in each Ray worker, which imports this module)
 from agents.config import EnvSection, _KeyedError, _Strict, load_model_config, parse_set
 from agents.io import write_json_atomic, write_yaml_atomic
 from agents.policy import Policy
+from agents.runs import git_state, load_run, run_dirs, versions
 from moor_env.envs.config import EnvConfig, load_env_config
 from moor_env.errors import ConfigError
 
@@ -154,15 +159,12 @@ def make_rllib_env(env_context: dict[str, Any]):
 
     ``env_context`` (RLlib's ``EnvContext``, a dict) holds ``id`` and ``config`` (the env config as a mapping).
     """
-    import gymnasium as gym  # noqa: PLC0415
-
-    import moor_env  # noqa: F401, PLC0415 - registers the env ids in this worker process
-
     return gym.make(env_context["id"], config=dict(env_context["config"]))
 
 
 def build_ppo_config(cfg: RllibConfig, env_cfg: EnvConfig):
     """The RLlib ``PPOConfig`` of a run (new API stack)."""
+    # ray (optional, the rl extra) loads only to train or to load an RLlib run
     from ray.rllib.algorithms.ppo import PPOConfig  # noqa: PLC0415
     from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig  # noqa: PLC0415
 
@@ -197,7 +199,7 @@ def connect_ray(cfg: RllibConfig, address: str | None = None) -> dict[str, Any]:
 
     An already initialised Ray (e.g. a test's ``ray.init``) is used as it is. Returns the cluster's CPUs and nodes.
     """
-    import ray  # noqa: PLC0415
+    import ray  # noqa: PLC0415 - ray (optional, the rl extra)
 
     if not ray.is_initialized():
         address = address or cfg.ray.address or os.environ.get("RAY_ADDRESS")
@@ -234,8 +236,6 @@ def save_checkpoint(algo: Any, run_dir: Path, iteration: int, keep: int) -> Path
 
 def latest_checkpoint(run_dir: str | Path) -> Path:
     """The newest checkpoint folder of a run (``checkpoints/latest.json``)."""
-    import json  # noqa: PLC0415
-
     pointer = Path(run_dir) / "checkpoints" / "latest.json"
     if not pointer.is_file():
         raise ConfigError("run_dir", str(run_dir), "an RLlib run directory with checkpoints/latest.json")
@@ -274,8 +274,6 @@ def iteration_row(result: dict[str, Any], wall_s: float, steps_before: int) -> d
 
 
 def _meta(cfg: RllibConfig, cluster: dict[str, Any]) -> dict[str, Any]:
-    from agents.train import git_state, versions  # noqa: PLC0415
-
     return {"name": cfg.name, "seed": cfg.seed, "framework": "rllib", "status": "running", "env_steps": 0,
             "train_wall_s": 0.0, "started": time.strftime("%Y-%m-%dT%H:%M:%S"), **git_state(),
             "versions": {**versions(), "ray": cluster["ray"]}, "cluster": cluster, "cpu_count": os.cpu_count(),
@@ -289,8 +287,8 @@ def train_rllib(cfg: RllibConfig, address: str | None = None) -> tuple[Path, dic
     ``meta`` holds ``env_steps``, ``train_wall_s`` (the training loop), ``build_s`` (starting the algorithm and its
     actors) and ``env_steps_per_s`` (env steps / training-loop wall time: sampling and learning together).
     """
-    import torch  # noqa: PLC0415
-    from ray import tune  # noqa: PLC0415
+    import torch  # noqa: PLC0415 - torch (optional, the rl extra)
+    from ray import tune  # noqa: PLC0415 - ray (optional)
 
     env_cfg = load_env_config(cfg.env.config, cfg.env.overrides)
     ppo = checked_ppo_config(cfg, env_cfg)
@@ -344,7 +342,7 @@ class RllibPolicy(Policy):
 
     def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
         """The deterministic action, clipped to the action box [-1, 1]."""
-        import torch  # noqa: PLC0415
+        import torch  # noqa: PLC0415 - torch (optional, the rl extra)
 
         with torch.no_grad():
             out = self.module.forward_inference({"obs": torch.as_tensor(np.asarray(obs, np.float32)[None])})
@@ -354,7 +352,7 @@ class RllibPolicy(Policy):
     @classmethod
     def load(cls, run_dir: str | Path) -> RllibPolicy:
         """Load the newest checkpoint's policy module of a run directory (no Ray instance needed)."""
-        from ray.rllib.core.rl_module.rl_module import RLModule  # noqa: PLC0415
+        from ray.rllib.core.rl_module.rl_module import RLModule  # noqa: PLC0415 - ray (optional, the rl extra)
 
         run_dir = Path(run_dir)
         cfg = load_rllib_config(run_dir / "rllib_config.yaml")
@@ -370,10 +368,8 @@ def is_rllib_run(run_dir: str | Path) -> bool:
 
 def load_run_policies(path: str | Path, checkpoint: str = "final") -> list[Policy]:
     """One policy per seed of a run or experiment directory, RLlib (this module; its final checkpoint) or
-    stable-baselines3 (:func:`agents.evaluate.load_run` with ``checkpoint``): ``runs/<name>/seed-<k>`` or
+    stable-baselines3 (:func:`agents.runs.load_run` with ``checkpoint``): ``runs/<name>/seed-<k>`` or
     ``runs/<name>`` holding ``seed-*/``."""
-    from agents.evaluate import load_run, run_dirs  # noqa: PLC0415
-
     path = Path(path)
     rllib = [path] if is_rllib_run(path) else sorted(p for p in path.glob("seed-*") if is_rllib_run(p))
     if rllib:

@@ -9,8 +9,9 @@ import pytest
 import yaml
 
 from agents.config import load_train_config
-from agents.evaluate import evaluate_policy, load_run
+from agents.evaluate import evaluate_policy
 from agents.io import write_text_atomic
+from agents.runs import load_run
 from agents.train import train, train_seed
 from moor_env.errors import ConfigError
 from tests.agents.conftest import tiny_train_config
