@@ -15,6 +15,8 @@ from typing import Any
 
 from moor_env.config import SET_SHORTCUTS, bundled_scene_names, load_scene, parse_set_value, set_key_help
 from moor_env.errors import ConfigError, SimulationDiverged, StaticsNotConverged
+from moor_env.plotting import check_plot_path, plot_drop
+from moor_env.simulation import simulate_drop, solve_statics
 
 
 class _OneLineParser(argparse.ArgumentParser):
@@ -102,20 +104,12 @@ def format_human(data: dict[str, Any]) -> list[str]:
 
 def _run(args: argparse.Namespace) -> dict[str, Any]:
     if getattr(args, "plot", None):
-        from moor_env.plotting import check_plot_path
-
         check_plot_path(args.plot)
     scene = load_scene(args.scene, _parse_sets(args.sets))
     if args.command == "static":
-        from moor_env.simulation import solve_statics
-
         return solve_statics(scene).to_dict()
-    from moor_env.simulation import simulate_drop
-
     result = simulate_drop(scene, keep_snapshots=bool(args.plot), progress=not args.no_progress)
     if args.plot:
-        from moor_env.plotting import plot_drop
-
         plot_drop(result, args.plot, title=scene.name)
     return result.to_dict()
 

@@ -31,7 +31,8 @@ from moor_env.physics.integrate import (
     compute_accelerations,
 )
 from moor_env.physics.line import top_tensions
-from moor_env.physics.statics import change_line_length, solve_equilibrium
+from moor_env.physics.statics import solve_equilibrium
+from moor_env.physics.statics_guess import change_line_length, check_fibre_clearance
 from moor_env.physics.vessels import fill_tracks, jonswap_components, track_samples, wave_track_coefficients
 
 HISTORY_CAPACITY = 20000
@@ -410,6 +411,7 @@ class StaticResult:
     wire_length_m: float | None
     iterations: int
     wall_static_s: float
+    method: str = "newton"  # the solver that finished: "newton", or "relaxation" (the fallback)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary."""
@@ -424,18 +426,25 @@ def _adjust_to_drop_height(sim: Simulator, target_z: float) -> float:
     return float(tip[2] - target_z)
 
 
-def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3) -> StaticResult:
+def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: bool = True) -> StaticResult:
     """Hanging equilibrium before release (seed 003 Model 1), drop height held at its set value.
 
     For an installation scene with a wire, the wire's unstretched length is corrected (at its top) until the
     anchor tip hangs ``drop_height_m`` above the seabed within ``tol_m``; without a wire, the held chain top
     is moved instead.
+
+    Raises
+    ------
+    moor_env.errors.NoEquilibrium
+        The scene has none (the cause and the key to change are named).
+    moor_env.errors.StaticsNotConverged
     """
     t0 = time.perf_counter()
     model = scene if isinstance(scene, Model) else compile_scene(scene)
     sim = Simulator(model)
-    report = solve_equilibrium(sim)
+    report = solve_equilibrium(sim, progress=progress)
     iterations = report.iterations
+    method = report.method
     sc = model.scene
     if sc.kind == "dart_installation" and model.release_node >= 0:
         target = -sc.environment.water_depth_m + sc.installation.drop_height_m
@@ -447,7 +456,10 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3) -> StaticResu
                 change_line_length(sim.state, model.lines["wire"].index, err)
             else:
                 sim.state.node_pos[model.release_node, 2] -= err
-            iterations += solve_equilibrium(sim, warm=True).iterations
+            warm = solve_equilibrium(sim, warm=True, progress=progress)
+            iterations += warm.iterations
+            method = "relaxation" if warm.method == "relaxation" else method
+        check_fibre_clearance(sim)
     sim.state.line_f[:, L.LF_MAX_TENSION] = 0.0
     wall = time.perf_counter() - t0
     release = None
@@ -461,7 +473,7 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3) -> StaticResu
     wire_len = sim.line_length_m("wire") if "wire" in model.lines else None
     return StaticResult(simulator=sim, release_point_m=release, tip_height_above_seabed_m=tip_h, tilt_deg=tilt,
                         top_tensions_n=sim.top_tensions_n(), wire_length_m=wire_len, iterations=iterations,
-                        wall_static_s=wall)
+                        wall_static_s=wall, method=method)
 
 
 # --- drop ----------------------------------------------------------------------------------------------------

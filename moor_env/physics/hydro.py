@@ -75,3 +75,27 @@ def solve_sym3(m, a, b, c, d, e, f, rx, ry, rz):
         (c12 * rx + c22 * ry + c23 * rz) * inv,
         (c13 * rx + c23 * ry + c33 * rz) * inv,
     )
+
+
+@jit
+def slender_drag_dq(vrx, vry, vrz, qx, qy, qz, half_rho_cdn_d_len, half_rho_cdt_pid_len, out):
+    """Derivative of :func:`slender_drag` with respect to the unit tangent q at fixed relative velocity:
+    ``out[i, j] = d f_i / d q_j`` [N] (the static solver's Jacobian of current drag on a line that turns).
+
+    With v_t = v_r . q and v_rn = v_r - v_t q: d f / d q = -cn (|v_rn| I + v_rn v_rn^T / |v_rn|)(q v_r^T + v_t I)
+    + ct |v_t| (2 q v_r^T + v_t I).
+    """
+    vt = vrx * qx + vry * qy + vrz * qz
+    n = (vrx - vt * qx, vry - vt * qy, vrz - vt * qz)
+    vn = math.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+    q = (qx, qy, qz)
+    vr = (vrx, vry, vrz)
+    cn = half_rho_cdn_d_len
+    ct = half_rho_cdt_pid_len * abs(vt)
+    for i in range(3):
+        for j in range(3):
+            # (q v_r^T + v_t I)[k, j] contracted with (|v_rn| I + n n^T / |v_rn|)[i, k]
+            a = vn * (q[i] * vr[j] + (vt if i == j else 0.0))
+            if vn > 0.0:
+                a += n[i] * (n[0] * q[0] + n[1] * q[1] + n[2] * q[2]) * vr[j] / vn + n[i] * n[j] * vt / vn
+            out[i, j] = -cn * a + ct * (2.0 * q[i] * vr[j] + (vt if i == j else 0.0))

@@ -38,17 +38,12 @@ segment snapping taut within a step is an inelastic event. Linearised (implicit)
 Weight, buoyancy and everything else are explicit. The anchor is then advanced like symplectic Euler with its
 corrected acceleration; nodes set from the anchor, vessels and welded parents are placed by the caller.
 
-Solver: the node graph (welded nodes merged into their parent, vessel/fixed nodes prescribed, the body node
-as the root of its component) is a tree, so the block system is solved in O(N) without fill-in by block
-Gaussian elimination leaves first. The ordering is built by peeling leaves: each node keeps its degree and the
-*sums* of its neighbours' and segments' indices; when its degree is 1 those sums are its parent and its parent
-segment. It depends on the topology alone, so it is kept from one step to the next and rebuilt only where the
-caller cannot vouch for the topology (``reuse_order`` false): at the first step of every ``advance`` call
-(release, a dropped line, a restored state happen between calls) and after a step whose payout split or merged
-a segment. A kept order is the one a rebuild would give, so results are the same bit for bit (tested). A
-closed loop of lines is refused at compile time (``stability.implicit_time_step``); should one appear anyway,
-it is broken by lagging the coupling of its extra edges (their stiffness stays on the diagonal), which keeps the
-solve defined but is not stable for stiff lines.
+Solver: the block tree elimination of ``physics/tree.py`` (O(N), no fill-in), with the body node as the root of
+its component. Its ordering depends on the topology alone, so it is kept from one step to the next and rebuilt
+only where the caller cannot vouch for the topology (``reuse_order`` false): at the first step of every
+``advance`` call (release, a dropped line, a restored state happen between calls) and after a step whose payout
+split or merged a segment. A kept order is the one a rebuild would give, so results are the same bit for bit
+(tested). A closed loop of lines is refused at compile time (``stability.implicit_time_step``).
 
 Scratch memory (no new workspace arrays, no allocation per step, ``advance``'s signature unchanged): the step
 reuses the simulator's workspace. ``node_mm`` holds the diagonal blocks and, after elimination, their
@@ -103,10 +98,8 @@ from moor_env.physics.layout import (
     NF_POINT_CDA,
     NF_POINT_VOLUME,
     NI_KIND,
-    NI_REF,
     NODE_BODY,
     NODE_FREE,
-    NODE_WELDED,
     SF_L0,
     SI_A,
     SI_ACTIVE,
@@ -114,41 +107,27 @@ from moor_env.physics.layout import (
     SI_MAT,
 )
 from moor_env.physics.line import segment_axis
+from moor_env.physics.tree import (
+    OR_EFF,
+    OR_FLAGS,
+    OR_ORDER,
+    TR_DEG,
+    TR_NB,
+    TR_SEG,
+    add_sym,
+    back_from_parent,
+    build_tree,
+    count_unknowns,
+    invert_block,
+    order,
+    schur_into_parent,
+)
 
-# int64 views of pos0 (TR_*) and vel0 (OR_*)
-TR_DEG = 0  # remaining degree; -1 once eliminated below its parent, -2 once eliminated as a root
-TR_NB = 1  # sum of remaining neighbour indices (the parent once the degree is 1)
-TR_SEG = 2  # sum of remaining segment indices (the parent segment once the degree is 1)
-OR_ORDER = 0  # elimination order (row k: k-th node eliminated)
-OR_EFF = 1  # effective unknown of a node: itself (free / body root), its parent (welded), or -1 (prescribed)
-OR_FLAGS = 2  # word s >> 5, bits 2 (s & 31) and 2 (s & 31) + 1: segment s is taut / has changed set
-
+# int64 views of pos0 (tree) and vel0 (orow); bits 2 (s & 31) and 2 (s & 31) + 1 of word s >> 5 of
+# orow[:, OR_FLAGS]: segment s is taut / has changed set
 MAX_ACTIVE_SET_SOLVES = 8
 SET_TOLERANCE = 1e-6  # strain by which a segment must miss its predicted set before the step is solved again
 DRAG_SKIP = 0.02  # drag of a half segment is linearised only where h * (its damping rate) exceeds this
-
-
-@jit_step
-def _inv_sym3(a11, a22, a33, a12, a13, a23):
-    """Inverse of the symmetric 3x3 [[a11, a12, a13], [a12, a22, a23], [a13, a23, a33]] as 6 entries."""
-    c11 = a22 * a33 - a23 * a23
-    c12 = a13 * a23 - a12 * a33
-    c13 = a12 * a23 - a13 * a22
-    c22 = a11 * a33 - a13 * a13
-    c23 = a12 * a13 - a11 * a23
-    c33 = a11 * a22 - a12 * a12
-    inv = 1.0 / (a11 * c11 + a12 * c12 + a13 * c13)
-    return c11 * inv, c22 * inv, c33 * inv, c12 * inv, c13 * inv, c23 * inv
-
-
-@jit_step
-def _add_sym(mm, n, xx, yy, zz, xy, xz, yz):
-    mm[n, 0] += xx
-    mm[n, 1] += yy
-    mm[n, 2] += zz
-    mm[n, 3] += xy
-    mm[n, 4] += xz
-    mm[n, 5] += yz
 
 
 @jit_step
@@ -208,22 +187,9 @@ def _drag_jacobian(mm, n, h, vrx, vry, vrz, qx, qy, qz, cn, ct):
     iso = h * cn * vn
     qq = h * 2.0 * ct * abs(vt) - iso
     nn = h * cn / vn if vn > 0.0 else 0.0
-    _add_sym(mm, n, iso + qq * qx * qx + nn * nx * nx, iso + qq * qy * qy + nn * ny * ny,
+    add_sym(mm, n, iso + qq * qx * qx + nn * nx * nx, iso + qq * qy * qy + nn * ny * ny,
              iso + qq * qz * qz + nn * nz * nz, qq * qx * qy + nn * nx * ny, qq * qx * qz + nn * nx * nz,
              qq * qy * qz + nn * ny * nz)
-
-
-@jit_step
-def _effective_unknown(n, body_node, node_i):
-    """The unknown that carries node n: itself (free, or the body root), its parent (welded), or -1."""
-    kind = node_i[n, NI_KIND]
-    if kind == NODE_FREE or n == body_node:
-        return n
-    if kind == NODE_WELDED:
-        p = node_i[n, NI_REF]
-        if node_i[p, NI_KIND] == NODE_FREE or p == body_node:
-            return p
-    return -1
 
 
 @jit_step
@@ -242,37 +208,8 @@ def _init_active_set(seg_i, seg_tension, orow):
 @jit_step
 def _setup(body_node, node_i, seg_i, seg_tension, tree, orow):
     """Effective unknown of every node, tree degrees and neighbour/segment sums, initial active set."""
-    nn = node_i.shape[0]
-    for n in range(nn):
-        orow[n, OR_EFF] = _effective_unknown(n, body_node, node_i)
-        tree[n, TR_DEG] = 0
-        tree[n, TR_NB] = 0
-        tree[n, TR_SEG] = 0
+    build_tree(body_node, node_i, seg_i, tree, orow)
     _init_active_set(seg_i, seg_tension, orow)
-    for s in range(seg_i.shape[0]):
-        if seg_i[s, SI_ACTIVE] == 0:
-            continue
-        ea = orow[seg_i[s, SI_A], OR_EFF]
-        eb = orow[seg_i[s, SI_B], OR_EFF]
-        if ea == eb:
-            continue  # both prescribed, or a welded node and its parent: internal
-        if ea >= 0 and eb >= 0:
-            tree[ea, TR_DEG] += 1
-            tree[ea, TR_NB] += eb
-            tree[ea, TR_SEG] += s
-            tree[eb, TR_DEG] += 1
-            tree[eb, TR_NB] += ea
-            tree[eb, TR_SEG] += s
-
-
-@jit_step
-def _count_unknowns(body_node, orow):
-    """Number of unknowns of an order kept from the previous step (every one of them is in the order)."""
-    nq = 0
-    for n in range(orow.shape[0]):
-        if orow[n, OR_EFF] == n and n != body_node:
-            nq += 1
-    return nq
 
 
 @jit_step
@@ -282,76 +219,9 @@ def _prepare(reuse_order, body_node, node_i, seg_i, seg_tension, tree, orow):
     """
     if not reuse_order:
         _setup(body_node, node_i, seg_i, seg_tension, tree, orow)
-        return _order(body_node, node_i, seg_i, tree, orow)
+        return order(body_node, node_i, seg_i, tree, orow)
     _init_active_set(seg_i, seg_tension, orow)
-    return _count_unknowns(body_node, orow)
-
-
-@jit_step
-def _order(body_node, node_i, seg_i, tree, orow):
-    """Leaves-first elimination order into orow[:, OR_ORDER]; returns the number of unknowns ordered."""
-    nn = node_i.shape[0]
-    n_unknown = 0
-    nq = 0
-    for n in range(nn):
-        if orow[n, OR_EFF] == n and n != body_node:
-            n_unknown += 1
-            if tree[n, TR_DEG] <= 1:
-                orow[nq, OR_ORDER] = n
-                nq += 1
-    head = 0
-    while True:
-        while head < nq:
-            c = orow[head, OR_ORDER]
-            head += 1
-            if tree[c, TR_DEG] == 1:
-                p = tree[c, TR_NB]
-                tree[p, TR_DEG] -= 1
-                tree[p, TR_NB] -= c
-                tree[p, TR_SEG] -= tree[c, TR_SEG]
-                if p != body_node and tree[p, TR_DEG] == 1:
-                    orow[nq, OR_ORDER] = p
-                    nq += 1
-                tree[c, TR_DEG] = -1
-            else:
-                tree[c, TR_DEG] = -2
-        if nq >= n_unknown:
-            return nq
-        # a cycle: eliminate its first node below one neighbour and lag the coupling of its other edges
-        c = -1
-        for n in range(nn):
-            if orow[n, OR_EFF] == n and n != body_node and tree[n, TR_DEG] >= 2:
-                c = n
-                break
-        if c < 0:
-            return nq
-        parent = -1
-        pseg = -1
-        for s in range(seg_i.shape[0]):
-            if seg_i[s, SI_ACTIVE] == 0:
-                continue
-            ea = orow[seg_i[s, SI_A], OR_EFF]
-            eb = orow[seg_i[s, SI_B], OR_EFF]
-            if ea == eb or ea < 0 or eb < 0 or (ea != c and eb != c):
-                continue
-            x = eb if ea == c else ea
-            if tree[x, TR_DEG] < 0:
-                continue
-            if parent < 0:
-                parent = x
-                pseg = s
-            else:
-                tree[x, TR_DEG] -= 1
-                tree[x, TR_NB] -= c
-                tree[x, TR_SEG] -= s
-                if x != body_node and tree[x, TR_DEG] == 1:
-                    orow[nq, OR_ORDER] = x
-                    nq += 1
-        tree[c, TR_DEG] = 1
-        tree[c, TR_NB] = parent
-        tree[c, TR_SEG] = pseg
-        orow[nq, OR_ORDER] = c
-        nq += 1
+    return count_unknowns(body_node, orow)
 
 
 @jit_step
@@ -405,7 +275,7 @@ def _assemble(h, first, body_node, node_pos, node_vel, node_i, node_f, seg_i, se
             if vr > 0.0:
                 k = h * 0.5 * rho * cda
                 kv = k / vr
-                _add_sym(node_mm, e, k * vr + kv * rx * rx, k * vr + kv * ry * ry, k * vr + kv * rz * rz,
+                add_sym(node_mm, e, k * vr + kv * rx * rx, k * vr + kv * ry * ry, k * vr + kv * rz * rz,
                          kv * rx * ry, kv * rx * rz, kv * ry * rz)
         area = node_contact[n]
         penetration = -depth - node_pos[n, 2]
@@ -499,9 +369,9 @@ def _assemble(h, first, body_node, node_pos, node_vel, node_i, node_f, seg_i, se
             gxz = alpha * qx * qz
             gyz = alpha * qy * qz
             if ea >= 0:
-                _add_sym(node_mm, ea, gxx, gyy, gzz, gxy, gxz, gyz)
+                add_sym(node_mm, ea, gxx, gyy, gzz, gxy, gxz, gyz)
             if eb >= 0:
-                _add_sym(node_mm, eb, gxx, gyy, gzz, gxy, gxz, gyz)
+                add_sym(node_mm, eb, gxx, gyy, gzz, gxy, gxz, gyz)
         if ea >= 0:
             node_acc[ea, 0] += fx
             node_acc[ea, 1] += fy
@@ -517,47 +387,14 @@ def _eliminate(h, nq, node_pos, seg_i, seg_f, mat_f, seg_tension, node_mm, node_
     """Forward elimination, leaves first: node_mm <- D^-1, node_acc <- y = D^-1 r; Schur terms into parents."""
     for k in range(nq):
         c = orow[k, OR_ORDER]
-        i11, i22, i33, i12, i13, i23 = _inv_sym3(node_mm[c, 0], node_mm[c, 1], node_mm[c, 2], node_mm[c, 3],
-                                                 node_mm[c, 4], node_mm[c, 5])
-        node_mm[c, 0] = i11
-        node_mm[c, 1] = i22
-        node_mm[c, 2] = i33
-        node_mm[c, 3] = i12
-        node_mm[c, 4] = i13
-        node_mm[c, 5] = i23
-        rx = node_acc[c, 0]
-        ry = node_acc[c, 1]
-        rz = node_acc[c, 2]
-        yx = i11 * rx + i12 * ry + i13 * rz
-        yy = i12 * rx + i22 * ry + i23 * rz
-        yz = i13 * rx + i23 * ry + i33 * rz
-        node_acc[c, 0] = yx
-        node_acc[c, 1] = yy
-        node_acc[c, 2] = yz
+        invert_block(node_mm, node_acc, c)
         if tree[c, TR_DEG] != -1:
             continue
-        p = tree[c, TR_NB]
         alpha, beta, qx, qy, qz, kq, kt = _segment_gain(tree[c, TR_SEG], h, orow, node_pos, seg_i, seg_f, mat_f,
                                                         seg_tension)
         if alpha == 0.0 and beta == 0.0:
             continue
-        # D_p -= G D_c^-1 G and r_p += G y, with G = alpha q q^T + beta I
-        wx = i11 * qx + i12 * qy + i13 * qz
-        wy = i12 * qx + i22 * qy + i23 * qz
-        wz = i13 * qx + i23 * qy + i33 * qz
-        a2 = alpha * alpha * (qx * wx + qy * wy + qz * wz)
-        ab = alpha * beta
-        b2 = beta * beta
-        _add_sym(node_mm, p, -(a2 * qx * qx + 2.0 * ab * qx * wx + b2 * i11),
-                 -(a2 * qy * qy + 2.0 * ab * qy * wy + b2 * i22),
-                 -(a2 * qz * qz + 2.0 * ab * qz * wz + b2 * i33),
-                 -(a2 * qx * qy + ab * (qx * wy + wx * qy) + b2 * i12),
-                 -(a2 * qx * qz + ab * (qx * wz + wx * qz) + b2 * i13),
-                 -(a2 * qy * qz + ab * (qy * wz + wy * qz) + b2 * i23))
-        gy = alpha * (qx * yx + qy * yy + qz * yz)
-        node_acc[p, 0] += gy * qx + beta * yx
-        node_acc[p, 1] += gy * qy + beta * yy
-        node_acc[p, 2] += gy * qz + beta * yz
+        schur_into_parent(node_mm, node_acc, c, tree[c, TR_NB], alpha, beta, qx, qy, qz)
 
 
 @jit_step
@@ -567,21 +404,11 @@ def _back_substitute(h, nq, node_pos, seg_i, seg_f, mat_f, seg_tension, node_mm,
         c = orow[k, OR_ORDER]
         if tree[c, TR_DEG] != -1:
             continue
-        p = tree[c, TR_NB]
         alpha, beta, qx, qy, qz, kq, kt = _segment_gain(tree[c, TR_SEG], h, orow, node_pos, seg_i, seg_f, mat_f,
                                                         seg_tension)
         if alpha == 0.0 and beta == 0.0:
             continue
-        dpx = node_acc[p, 0]
-        dpy = node_acc[p, 1]
-        dpz = node_acc[p, 2]
-        qd = alpha * (qx * dpx + qy * dpy + qz * dpz)
-        gx = qd * qx + beta * dpx
-        gy = qd * qy + beta * dpy
-        gz = qd * qz + beta * dpz
-        node_acc[c, 0] += node_mm[c, 0] * gx + node_mm[c, 3] * gy + node_mm[c, 4] * gz
-        node_acc[c, 1] += node_mm[c, 3] * gx + node_mm[c, 1] * gy + node_mm[c, 5] * gz
-        node_acc[c, 2] += node_mm[c, 4] * gx + node_mm[c, 5] * gy + node_mm[c, 2] * gz
+        back_from_parent(node_mm, node_acc, c, tree[c, TR_NB], alpha, beta, qx, qy, qz)
 
 
 @jit_step

@@ -1,559 +1,696 @@
-"""Static equilibrium of the discrete model (the seed's Model 1): the hanging system before release.
+"""Static equilibrium of the discrete model: the hanging system before release (seed 003, section 8.2, Model 1).
 
-The residual is the net load on every free node and on the anchor, computed by the *same* kernel as the
-dynamics with all velocities zero (so current drag acts as a static load and the static state is an exact
-rest state of the dynamic model: no start-up transient). It is driven to zero by pseudo-transient
-continuation, a damped Newton method robust from poor first guesses (slack segments, a line through the
-seabed):
+The residual is the net load on every free node and on the anchor, computed by the dynamics' own load kernel
+(``integrate.compute_loads``) with every velocity zero, so current drag acts as a static load and the static
+state is an exact rest state of the dynamic model: a release from it starts without a transient.
 
-    (D / tau^2 - J) dx = F(x),        tau grows as the residual falls (switched evolution relaxation),
+It is driven to zero by Newton's method with pseudo-transient continuation (switched evolution relaxation)::
 
-where D holds the node masses and anchor inertia, and J = dF/dx is built by finite differences with a
-distance-2 colouring of the node graph (about ten residual evaluations per Jacobian whatever the node count).
-For large tau this is Newton's method and converges quadratically.
+    (D / tau^2 + K) dx = F(x),        tau grows as the residual falls,
+
+all in one numba kernel. D holds the node masses and the anchor's inertia; K = -dF/dx is analytic: per segment
+dT/dl q q^T + (T / l) (I - q q^T) (the elastic and geometric stiffness), the seabed's vertical stiffness, and
+for the anchor J^T S J plus the geometric stiffness of its arms (a force f at axial coordinate s resists a tilt
+by s (e . f)). Current drag enters the residual but not K (inexact Newton: the drag's change with the line's
+angle is small next to the geometric stiffness of a hanging line). The system is solved in O(N) by the block
+tree elimination of ``physics/tree.py``, the anchor's five unknowns (position, two tilt angles) as the root.
+
+The tension-only law has a kink at zero strain. The solve runs on the smoothed law
+EA (e + sqrt(e^2 + s^2)) / 2 with s lowered from ``SMOOTHING_START`` to ``SMOOTHING_FINAL`` = 1e-8 (it differs
+from the exact law by less than EA * 1e-8 / 2, 9 N for the 142 mm chain, on a fully slack segment, and by far
+less on taut ones). A compressed segment keeps a small axial stiffness ``SLACK_STIFFNESS`` EA / l0 in K, so that
+a node between two slack segments (a fold of chain on the seabed) is not singular.
+
+The first guess (``physics/statics_guess.py``) puts every line on its elastic catenary, so that Newton starts
+with the lines in tension and converges in a few tens of iterations.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import time
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
+from tqdm.auto import tqdm
 
-from moor_env.errors import StaticsNotConverged
+from moor_env.errors import SimulationDiverged, StaticsNotConverged
 from moor_env.physics import layout as L
-from moor_env.physics.catenary import Section, shape, solve_grounded, solve_suspended, trim
-from moor_env.physics.integrate import set_constrained_nodes
+from moor_env.physics import statics_relaxation
+from moor_env.physics._jit import jit_step
+from moor_env.physics.anchor import rotate_axis
+from moor_env.physics.environment import current_velocity
+from moor_env.physics.hydro import slender_drag_dq
+from moor_env.physics.integrate import INTEGRATOR_IMPLICIT_EULER, compute_loads, set_constrained_nodes
+from moor_env.physics.line import segment_axis
+from moor_env.physics.statics_guess import first_guess
+from moor_env.physics.statics_relaxation import StaticsReport
+from moor_env.physics.tree import OR_EFF, OR_ORDER, TR_DEG, TR_NB, TR_SEG, build_tree, order
+
+SMOOTHING_START = 1e-6
+SMOOTHING_FINAL = 1e-8
+SLACK_STIFFNESS = 1.0  # axial stiffness of a compressed segment in K, as a fraction of EA / l0
+PHASE_ITERATIONS = 30  # iterations on one smoothing level before it is lowered anyway
+MAX_ROTATION_RAD = 0.2  # largest anchor tilt change per Newton step
+TAU_START_S = 10.0
+TAU_MAX_S = 1e12
+WATCHDOG_ITERATIONS = 8
+STEP_TOLERANCE_M = 1e-4  # converged once the residual is within tolerance and the last Newton step below this
+
+# ctl slots: the kernel's controls and the state it hands back between calls
+C_TAU = 0
+C_SMOOTHING = 1
+C_TOL = 2
+C_MAX_STEP = 3
+C_ITERATIONS = 4  # total Newton iterations so far
+C_STATUS = 5
+C_RESIDUAL = 6  # largest |residual| / weight scale of the last evaluation
+C_PHASE_IT = 7
+C_BEST = 8  # best sum of squared scaled residuals on the current smoothing level (0: none yet)
+C_SINCE_BEST = 9  # iterations since it
+C_LAST_STEP = 10  # largest node move of the last Newton step [m]
+N_CTL = 11
+
+STATUS_RUNNING = 0
+STATUS_CONVERGED = 1
+STATUS_NONFINITE = 2
 
 
-@dataclass
-class StaticsReport:
-    """Outcome of a static solve."""
-
-    iterations: int
-    residual_n: float
-    max_step_m: float
-    n_dofs: int
-
-
-class _Problem:
-    """Degrees of freedom and residual of the static problem for a simulator state."""
-
-    def __init__(self, sim) -> None:
-        self.sim = sim
-        st = sim.state
-        kinds = st.node_i[:, L.NI_KIND]
-        self.free = np.nonzero(kinds == L.NODE_FREE)[0]
-        self.body = bool(sim.model.body_active and self._body_is_free())
-        self.n_node_dofs = 3 * self.free.size
-        self.n_dofs = self.n_node_dofs + (5 if self.body else 0)
-        self.basis = np.zeros((2, 3))
-        self._build_graph()
-
-    def _body_is_free(self) -> bool:
-        # the anchor is a static unknown only when something holds it (a line attached to its back tip)
-        return bool(np.any(self.sim.state.node_i[:, L.NI_KIND] == L.NODE_BODY))
-
-    def _build_graph(self) -> None:
-        st = self.sim.state
-        nn = st.node_i.shape[0]
-        vertex = -np.ones(nn, dtype=np.int64)
-        vertex[self.free] = np.arange(self.free.size)
-        body_vertex = self.free.size
-        kinds = st.node_i[:, L.NI_KIND]
-        owner = np.arange(nn)
-        welded = kinds == L.NODE_WELDED
-        owner[welded] = st.node_i[welded, L.NI_REF]
-        if self.body:
-            vertex[kinds == L.NODE_BODY] = body_vertex
-        vertex_of = vertex[owner]
-        self.vertex_of = vertex_of
-        n_vert = self.free.size + (1 if self.body else 0)
-        nbrs: list[set[int]] = [set() for _ in range(n_vert)]
-        for s in np.nonzero(st.seg_i[:, L.SI_ACTIVE])[0]:
-            a, b = vertex_of[st.seg_i[s, L.SI_A]], vertex_of[st.seg_i[s, L.SI_B]]
-            if a >= 0 and b >= 0 and a != b:
-                nbrs[a].add(b)
-                nbrs[b].add(a)
-        color = -np.ones(n_vert, dtype=np.int64)
-        if self.body:
-            color[body_vertex] = 0
-        for v in range(self.free.size):
-            taken = set()
-            for u in nbrs[v]:
-                taken.add(color[u])
-                for w in nbrs[u]:
-                    taken.add(color[w])
-            c = 1
-            while c in taken:
-                c += 1
-            color[v] = c
-        self.colors = color
-        self.neighbours = nbrs
-        self.body_vertex = body_vertex
-
-    # --- dof <-> state -----------------------------------------------------------------------------------
-    def get_x(self) -> np.ndarray:
-        st = self.sim.state
-        x = np.zeros(self.n_dofs)
-        x[: self.n_node_dofs] = st.node_pos[self.free].ravel()
-        if self.body:
-            x[self.n_node_dofs: self.n_node_dofs + 3] = st.body_state[L.BS_POS: L.BS_POS + 3]
-            self._set_basis()
-        return x
-
-    def _set_basis(self) -> None:
-        e = self.sim.state.body_state[L.BS_AXIS: L.BS_AXIS + 3]
-        trial = np.array([1.0, 0.0, 0.0]) if abs(e[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-        u1 = np.cross(e, trial)
-        u1 /= np.linalg.norm(u1)
-        self.basis[0] = u1
-        self.basis[1] = np.cross(e, u1)
-
-    def set_x(self, x: np.ndarray, axis0: np.ndarray) -> None:
-        st = self.sim.state
-        st.node_pos[self.free] = x[: self.n_node_dofs].reshape(-1, 3)
-        st.node_vel[:] = 0.0
-        if self.body:
-            st.body_state[L.BS_POS: L.BS_POS + 3] = x[self.n_node_dofs: self.n_node_dofs + 3]
-            phi = x[self.n_node_dofs + 3] * self.basis[0] + x[self.n_node_dofs + 4] * self.basis[1]
-            st.body_state[L.BS_AXIS: L.BS_AXIS + 3] = _rotate(axis0, phi)
-            st.body_state[L.BS_VEL: L.BS_VEL + 3] = 0.0
-            st.body_state[L.BS_OMEGA: L.BS_OMEGA + 3] = 0.0
-
-    def residual(self) -> np.ndarray:
-        sim = self.sim
-        st = sim.state
-        set_constrained_nodes(st.t, st.node_pos, st.node_vel, st.body_state, st.node_i, st.node_f, sim.tracks,
-                              sim.env_f)
-        sim.evaluate_loads()
-        r = np.zeros(self.n_dofs)
-        r[: self.n_node_dofs] = sim.work.node_force[self.free].ravel()
-        if self.body:
-            load = sim.work.body_load
-            r[self.n_node_dofs: self.n_node_dofs + 3] = load[:3]
-            r[self.n_node_dofs + 3] = load[3:6] @ self.basis[0]
-            r[self.n_node_dofs + 4] = load[3:6] @ self.basis[1]
-        return r
-
-    def scales(self) -> tuple[np.ndarray, np.ndarray]:
-        """Mass per dof (for the pseudo-time term) and force scale per dof (for the tolerance)."""
-        sim = self.sim
-        g = sim.env_f[L.EF_G]
-        mass = np.repeat(np.maximum(sim.work.node_mass[self.free], 1e-6), 3)
-        weight = np.repeat(np.maximum(sim.work.node_mass[self.free], 1e-6) * g, 3)
-        if self.body:
-            bf = sim.model.body_f
-            mass = np.concatenate([mass, [bf[L.BF_MASS_AXIAL]] * 3, [bf[L.BF_M22]] * 2])
-            w = bf[L.BF_WEIGHT]
-            weight = np.concatenate([weight, [w] * 3, [w * bf[L.BF_LENGTH]] * 2])
-        return mass, weight
-
-    def jacobian(self, x: np.ndarray, r0: np.ndarray, axis0: np.ndarray, eps_m: float, eps_rad: float):
-        """Finite-difference Jacobian of the residual plus the elastic stiffness EA/l0 q q^T of every slack
-        segment between free nodes (inexact Newton, as usual in cable statics): with the exact law's zero
-        stiffness a node between two slack segments would look unsupported to Newton's method."""
-        return self._fd_jacobian(x, r0, axis0, eps_m, eps_rad) - self._slack_stiffness()
-
-    def _slack_stiffness(self):
-        st = self.sim.state
-        mat_f = self.sim.model.mat_f
-        segs = np.nonzero(st.seg_i[:, L.SI_ACTIVE])[0]
-        a = st.seg_i[segs, L.SI_A]
-        b = st.seg_i[segs, L.SI_B]
-        d = st.node_pos[b] - st.node_pos[a]
-        length = np.linalg.norm(d, axis=1)
-        l0 = st.seg_f[segs, L.SF_L0]
-        slack = (length <= l0) & (length > 0)
-        va, vb = self.vertex_of[a[slack]], self.vertex_of[b[slack]]
-        q = d[slack] / length[slack, None]
-        k = mat_f[st.seg_i[segs[slack], L.SI_MAT], L.MF_EA] / l0[slack]
-        blocks = k[:, None, None] * q[:, :, None] * q[:, None, :]
-        rows, cols, vals = [], [], []
-        for i in range(blocks.shape[0]):
-            for u, w, sign in ((va[i], va[i], 1.0), (vb[i], vb[i], 1.0), (va[i], vb[i], -1.0), (vb[i], va[i], -1.0)):
-                if u < 0 or w < 0 or u >= self.free.size or w >= self.free.size:
-                    continue
-                for r in range(3):
-                    for c in range(3):
-                        rows.append(3 * u + r)
-                        cols.append(3 * w + c)
-                        vals.append(sign * blocks[i, r, c])
-        return sp.csc_matrix((vals, (rows, cols)), shape=(self.n_dofs, self.n_dofs))
-
-    def _fd_jacobian(self, x: np.ndarray, r0: np.ndarray, axis0: np.ndarray, eps_m: float, eps_rad: float):
-        rows, cols, vals = [], [], []
-        n_colors = int(self.colors.max()) + 1 if self.colors.size else 0
-        for c in range(1, n_colors):
-            members = np.nonzero(self.colors[: self.free.size] == c)[0]
-            if members.size == 0:
-                continue
-            for d in range(3):
-                xp = x.copy()
-                xp[3 * members + d] += eps_m
-                self.set_x(xp, axis0)
-                dr = (self.residual() - r0) / eps_m
-                for v in members:
-                    col = 3 * v + d
-                    for u in (v, *self.neighbours[v]):
-                        rr = self._rows(u)
-                        rows.extend(rr)
-                        cols.extend([col] * len(rr))
-                        vals.extend(dr[rr])
-        if self.body:
-            base = self.n_node_dofs
-            touched = [self.body_vertex, *self.neighbours[self.body_vertex]]
-            for k in range(5):
-                xp = x.copy()
-                xp[base + k] += eps_m if k < 3 else eps_rad
-                self.set_x(xp, axis0)
-                dr = (self.residual() - r0) / (eps_m if k < 3 else eps_rad)
-                for u in touched:
-                    rr = self._rows(u)
-                    rows.extend(rr)
-                    cols.extend([base + k] * len(rr))
-                    vals.extend(dr[rr])
-        self.set_x(x, axis0)
-        return sp.csc_matrix((vals, (rows, cols)), shape=(self.n_dofs, self.n_dofs))
-
-    def _rows(self, vertex: int) -> list[int]:
-        if self.body and vertex == self.body_vertex:
-            return list(range(self.n_node_dofs, self.n_node_dofs + 5))
-        return [3 * vertex, 3 * vertex + 1, 3 * vertex + 2]
+@jit_step
+def _basis(body_state, basis):
+    """Two unit vectors perpendicular to the anchor axis (the tilt unknowns rotate about them)."""
+    ex = body_state[L.BS_AXIS]
+    ey = body_state[L.BS_AXIS + 1]
+    ez = body_state[L.BS_AXIS + 2]
+    tx, ty, tz = (1.0, 0.0, 0.0) if abs(ex) < 0.9 else (0.0, 1.0, 0.0)
+    ux = ey * tz - ez * ty
+    uy = ez * tx - ex * tz
+    uz = ex * ty - ey * tx
+    norm = math.sqrt(ux * ux + uy * uy + uz * uz)
+    basis[0, 0] = ux / norm
+    basis[0, 1] = uy / norm
+    basis[0, 2] = uz / norm
+    basis[1, 0] = ey * basis[0, 2] - ez * basis[0, 1]
+    basis[1, 1] = ez * basis[0, 0] - ex * basis[0, 2]
+    basis[1, 2] = ex * basis[0, 1] - ey * basis[0, 0]
 
 
-def _rotate(axis: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    angle = float(np.linalg.norm(phi))
-    if angle == 0.0:
-        return axis.copy()
-    k = phi / angle
-    out = axis * math.cos(angle) + np.cross(k, axis) * math.sin(angle) + k * (k @ axis) * (1.0 - math.cos(angle))
-    return out / np.linalg.norm(out)
+@jit_step
+def _residual(body_node, basis, res_body, node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i,
+              seg_f, mat_f, line_f, body_f, body_q, env_f, current_profile, tracks, node_force, node_mm, node_mass,
+              node_contact, seg_tension, body_load, body_acc):
+    """Loads at the current state (velocities zero); returns (sum of squared scaled residuals, largest one).
 
-
-FINAL_SLACK_SMOOTHING = 1e-8
-CONTINUATION_ITERATIONS = 30
-RELAXATION_ROUNDS = 10  # rounds of 30 s relaxation + Newton always tried when Newton fails from the guess
-MAX_RELAXATION_ROUNDS = 30  # beyond RELAXATION_ROUNDS, only while the rounds still shrink the residual ...
-ROUND_PROGRESS = 0.9  # ... to below this fraction of the best so far (a fine slack loop creeps in slowly) ...
-STALLED_ROUNDS = 2  # ... in one of the last this many rounds (measured: one round stalled at 2.2e-4, the next converged)
-
-
-def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 300, max_step_m: float = 20.0,
-                      warm: bool = False, analytic_guess: bool = True) -> StaticsReport:
-    """Drive the simulator's current state to static equilibrium in place.
-
-    Strategy (each stage is cheap when the previous one did its job):
-
-    1. an analytic elastic-catenary first guess (``analytic_guess``; otherwise the current state is used,
-       however poor);
-    2. a short kinetic-damping dynamic relaxation (:func:`relax_dynamically`) with the dynamic kernel, which
-       settles the near-slack bottom of a chain loop where the tension-only kink stalls Newton's method;
-    3. pseudo-transient Newton (:func:`_solve_phase`) on a smoothed slack law EA (e + sqrt(e^2 + s^2)) / 2,
-       s = 1e-6 then ``FINAL_SLACK_SMOOTHING`` = 1e-8 (it then differs from the exact law by less than
-       EA * 1e-8 / 2, 9 N for the 142 mm chain, on a fully slack segment, and by far less on taut ones), with the
-       elastic stiffness of slack segments in the Jacobian;
-    4. if Newton fails: rounds of 30 s relaxation and Newton, ``RELAXATION_ROUNDS`` of them, then more (up to
-       ``MAX_RELAXATION_ROUNDS``) while one of the last ``STALLED_ROUNDS`` rounds still cut the remaining
-       residual by ``ROUND_PROGRESS``: a finely resolved slack loop pushed by current creeps towards equilibrium
-       over many rounds (measured: 500 m, spacing 50 m, 0.5 m loop chain, the seed current: 0.03 -> 2.2e-4 of
-       the tolerance scale over 10 rounds, halving every one or two, then one round without progress and
-       convergence in the next).
-
-    ``warm`` skips stages 1-2 for small changes of an equilibrium (e.g. a corrected wire length).
+    A node's residual is scaled by its weight, the anchor's force by its weight and its moments by its weight
+    times its length.
     """
-    if _Problem(sim).n_dofs == 0:  # nothing to solve (e.g. an anchor held at its drop height, no lines)
-        return StaticsReport(0, 0.0, 0.0, 0)
-    if warm:
-        try:
-            return _continuation(sim, 1e-7, tol_rel, max_iter, max_step_m, 1.0)
-        except StaticsNotConverged:
-            pass
-    elif analytic_guess:
-        first_guess(sim)
-    relax_dynamically(sim, max_time_s=2.0)
-    try:
-        return _continuation(sim, 1e-6, tol_rel, max_iter, max_step_m, 1.0)
-    except StaticsNotConverged:
-        pass
-    # large changes from the guess (a strong current pushes the hanging system tens of metres): alternate
-    # relaxation, which moves the slow pendulum-like modes, with Newton, which finishes once close
-    best = math.inf
-    stalled = 0
-    for rounds in range(1, MAX_RELAXATION_ROUNDS + 1):
-        relax_dynamically(sim, max_time_s=30.0)
-        try:
-            return _continuation(sim, 1e-6, tol_rel, 150, max_step_m, 1.0)
-        except StaticsNotConverged as exc:
-            residual = math.inf if exc.residual_rel is None else exc.residual_rel
-            stalled = 0 if residual < ROUND_PROGRESS * best else stalled + 1
-            if rounds >= RELAXATION_ROUNDS and stalled >= STALLED_ROUNDS:
-                break
-            best = min(best, residual)
-    raise StaticsNotConverged(f"static equilibrium not reached after {rounds} relaxation rounds "
-                              f"(largest residual/weight {best:.3g})", best)
+    set_constrained_nodes(0.0, node_pos, node_vel, body_state, node_i, node_f, tracks, env_f)
+    compute_loads(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f, mat_f, line_f, body_f,
+                  body_q, env_f, current_profile, node_force, node_mm, node_mass, node_contact, seg_tension,
+                  body_load, body_acc)
+    g = env_f[L.EF_G]
+    norm2 = 0.0
+    worst = 0.0
+    for n in range(node_i.shape[0]):
+        if node_i[n, L.NI_KIND] != L.NODE_FREE:
+            continue
+        scale = max(node_mass[n], 1e-6) * g
+        for c in range(3):
+            r = abs(node_force[n, c]) / scale
+            norm2 += r * r
+            if not (r <= worst):
+                worst = r
+    if body_node >= 0:
+        _basis(body_state, basis)
+        weight = body_f[L.BF_WEIGHT]
+        for c in range(3):
+            res_body[c] = body_load[c]
+        for k in range(2):
+            res_body[3 + k] = (body_load[3] * basis[k, 0] + body_load[4] * basis[k, 1]
+                               + body_load[5] * basis[k, 2])
+        for c in range(5):
+            r = abs(res_body[c]) / (weight if c < 3 else weight * body_f[L.BF_LENGTH])
+            norm2 += r * r
+            if not (r <= worst):
+                worst = r
+    return norm2, worst
 
 
-def _continuation(sim, smoothing: float, tol_rel: float, max_iter: int, max_step_m: float,
-                  tau0_s: float) -> StaticsReport:
-    iterations = 0
+@jit_step
+def _add_block(dmat, n, sign, m, scale):
+    """dmat[n] += sign * m * scale (3x3)."""
+    for i in range(3):
+        for j in range(3):
+            dmat[n, i, j] += sign * scale * m[i, j]
+
+
+@jit_step
+def _assemble(tau, body_node, node_pos, seg_i, seg_f, mat_f, env_f, current_profile, node_mass, node_contact,
+              seg_tension, dmat, coupling, orow):
+    """Diagonal blocks D / tau^2 + K (``dmat``) and the couplings of every segment's two ends
+    (``coupling[s, 0]`` = K_ab, ``coupling[s, 1]`` = K_ba), K = -dF/dx."""
+    nn = node_pos.shape[0]
+    inv_tau2 = 1.0 / (tau * tau)
+    dmat[:, :, :] = 0.0
+    for n in range(nn):
+        if orow[n, OR_EFF] == n and n != body_node:
+            m = max(node_mass[n], 1e-6) * inv_tau2
+            for c in range(3):
+                dmat[n, c, c] = m
+    depth = env_f[L.EF_DEPTH]
+    kbot = env_f[L.EF_KBOT]
+    for n in range(nn):
+        e = orow[n, OR_EFF]
+        # at zero penetration too: a node laid on the seabed by the guess rests on it
+        if e >= 0 and e != body_node and node_contact[n] > 0.0 and -depth - node_pos[n, 2] >= 0.0:
+            dmat[e, 2, 2] += kbot * node_contact[n]
+    smoothing = env_f[L.EF_SLACK_SMOOTHING]
+    rho = env_f[L.EF_RHO]
+    kmat = np.empty((3, 3))
+    dq = np.empty((3, 3))
+    for s in range(seg_i.shape[0]):
+        coupling[s, :, :, :] = 0.0
+        if seg_i[s, L.SI_ACTIVE] == 0:
+            continue
+        a = seg_i[s, L.SI_A]
+        b = seg_i[s, L.SI_B]
+        ea = orow[a, OR_EFF]
+        eb = orow[b, OR_EFF]
+        if ea == eb:
+            continue
+        mat = seg_i[s, L.SI_MAT]
+        ea_n = mat_f[mat, L.MF_EA]
+        l0 = seg_f[s, L.SF_L0]
+        length, qx, qy, qz = segment_axis(node_pos, a, b)
+        q = (qx, qy, qz)
+        strain = (length - l0) / l0
+        if smoothing > 0.0:
+            slope = 0.5 * ea_n * (1.0 + strain / math.sqrt(strain * strain + smoothing * smoothing))
+        else:
+            slope = ea_n if strain > 0.0 else 0.0
+        if strain <= 0.0:
+            slope = max(slope, SLACK_STIFFNESS * ea_n)
+        kq = slope / l0
+        kt = seg_tension[s] / length if length > 0.0 else 0.0
+        for i in range(3):
+            for j in range(3):
+                kmat[i, j] = (kq - kt) * q[i] * q[j] + (kt if i == j else 0.0)
+        if ea >= 0:
+            _add_block(dmat, ea, 1.0, kmat, 1.0)
+        if eb >= 0:
+            _add_block(dmat, eb, 1.0, kmat, 1.0)
+        _add_block(coupling[s], 0, -1.0, kmat, 1.0)
+        _add_block(coupling[s], 1, -1.0, kmat, 1.0)
+        # current drag turns with the segment: d f_end / d x_b = D_end P / length, d / d x_a = -D_end P / length
+        if env_f[L.EF_CUR_SCALE] == 0.0 or length <= 0.0:
+            continue
+        d = mat_f[mat, L.MF_D]
+        cn = 0.25 * rho * mat_f[mat, L.MF_CDN] * d * l0
+        ct = 0.25 * rho * mat_f[mat, L.MF_CDT] * math.pi * d * l0
+        for end in range(2):
+            node = a if end == 0 else b
+            ux, uy, uz = current_velocity(node_pos[node, 2], env_f, current_profile)
+            slender_drag_dq(ux, uy, uz, qx, qy, qz, cn, ct, dq)
+            for i in range(3):
+                for j in range(3):
+                    kmat[i, j] = (dq[i, j] - (dq[i, 0] * q[0] + dq[i, 1] * q[1] + dq[i, 2] * q[2]) * q[j]) / length
+            # K = -dF/dx: this end's row gets +D P / l from x_a and -D P / l from x_b
+            if end == 0:
+                if ea >= 0:
+                    _add_block(dmat, ea, 1.0, kmat, 1.0)
+                _add_block(coupling[s], 0, -1.0, kmat, 1.0)
+            else:
+                if eb >= 0:
+                    _add_block(dmat, eb, -1.0, kmat, 1.0)
+                _add_block(coupling[s], 1, 1.0, kmat, 1.0)
+
+
+@jit_step
+def _inverse3(m, out):
+    """Inverse of a general 3x3 matrix."""
+    c00 = m[1, 1] * m[2, 2] - m[1, 2] * m[2, 1]
+    c01 = m[0, 2] * m[2, 1] - m[0, 1] * m[2, 2]
+    c02 = m[0, 1] * m[1, 2] - m[0, 2] * m[1, 1]
+    c10 = m[1, 2] * m[2, 0] - m[1, 0] * m[2, 2]
+    c11 = m[0, 0] * m[2, 2] - m[0, 2] * m[2, 0]
+    c12 = m[0, 2] * m[1, 0] - m[0, 0] * m[1, 2]
+    c20 = m[1, 0] * m[2, 1] - m[1, 1] * m[2, 0]
+    c21 = m[0, 1] * m[2, 0] - m[0, 0] * m[2, 1]
+    c22 = m[0, 0] * m[1, 1] - m[0, 1] * m[1, 0]
+    inv = 1.0 / (m[0, 0] * c00 + m[0, 1] * c10 + m[0, 2] * c20)
+    out[0, 0] = c00 * inv
+    out[0, 1] = c01 * inv
+    out[0, 2] = c02 * inv
+    out[1, 0] = c10 * inv
+    out[1, 1] = c11 * inv
+    out[1, 2] = c12 * inv
+    out[2, 0] = c20 * inv
+    out[2, 1] = c21 * inv
+    out[2, 2] = c22 * inv
+
+
+@jit_step
+def _solve_body(tau, p, basis, res_body, body_state, node_f, node_force, body_f, smat, rho_p, dq):
+    """The anchor's five unknowns from the lines' impedance ``smat`` and right-hand side ``rho_p`` at node p.
+
+    (J^T S J + K_geo + D_b / tau^2) dq = R_b + J^T rho, with J the body node's motion per unknown (translation,
+    then rotation about basis[0] and basis[1]). Writes dq and returns the body node's motion J dq in ``rho_p``.
+    """
+    ex = body_state[L.BS_AXIS]
+    ey = body_state[L.BS_AXIS + 1]
+    ez = body_state[L.BS_AXIS + 2]
+    sp = node_f[p, L.NF_BODY_S]
+    jac = np.zeros((3, 5))
+    for c in range(3):
+        jac[c, c] = 1.0
+        jac[c, 3] = -sp * basis[1, c]  # s (u1 x e) = -s u2
+        jac[c, 4] = sp * basis[0, c]  # s (u2 x e) = s u1
+    a = jac.T @ smat @ jac
+    rhs = res_body + jac.T @ rho_p
+    inv_tau2 = 1.0 / (tau * tau)
+    geo = sp * (ex * node_force[p, 0] + ey * node_force[p, 1] + ez * node_force[p, 2])
+    geo += body_f[L.BF_S_BUOY] * body_f[L.BF_BUOYANCY] * ez
+    for c in range(3):
+        a[c, c] += body_f[L.BF_MASS_AXIAL] * inv_tau2
+    for c in range(3, 5):
+        a[c, c] += body_f[L.BF_M22] * inv_tau2 + geo
+    sol = np.linalg.solve(a, rhs)
+    dq[:] = sol
+    rho_p[:] = jac @ sol
+
+
+@jit_step
+def _newton_step(tau, nq, body_node, basis, res_body, dq, node_pos, body_state, node_f, seg_i, seg_f, mat_f,
+                 body_f, env_f, current_profile, node_force, node_mass, node_contact, node_acc, seg_tension, dmat,
+                 coupling, tree, orow):
+    """Solve (D / tau^2 + K) dx = F into node_acc (free nodes) and dq (anchor) by block elimination over the
+    tree, leaves first (x_c = D_c^-1 (r_c - K_cp x_p) once the parent p is known)."""
+    _assemble(tau, body_node, node_pos, seg_i, seg_f, mat_f, env_f, current_profile, node_mass, node_contact,
+              seg_tension, dmat, coupling, orow)
+    for n in range(node_pos.shape[0]):
+        if orow[n, OR_EFF] == n:
+            for c in range(3):
+                node_acc[n, c] = 0.0 if n == body_node else node_force[n, c]
+    inv = np.empty((3, 3))
+    kpc_inv = np.empty((3, 3))
+    for k in range(nq):
+        c = orow[k, OR_ORDER]
+        _inverse3(dmat[c], inv)
+        dmat[c, :, :] = inv
+        node_acc[c, :] = inv @ node_acc[c]
+        if tree[c, TR_DEG] != -1:
+            continue
+        s = tree[c, TR_SEG]
+        p = tree[c, TR_NB]
+        c_is_a = orow[seg_i[s, L.SI_A], OR_EFF] == c
+        k_cp = coupling[s, 0] if c_is_a else coupling[s, 1]
+        k_pc = coupling[s, 1] if c_is_a else coupling[s, 0]
+        kpc_inv[:, :] = k_pc @ inv
+        dmat[p, :, :] -= kpc_inv @ k_cp
+        node_acc[p, :] -= k_pc @ node_acc[c]
+    if body_node >= 0:
+        rho_p = node_acc[body_node].copy()
+        _solve_body(tau, body_node, basis, res_body, body_state, node_f, node_force, body_f, dmat[body_node],
+                    rho_p, dq)
+        node_acc[body_node, :] = rho_p
+    for k in range(nq - 1, -1, -1):
+        c = orow[k, OR_ORDER]
+        if tree[c, TR_DEG] != -1:
+            continue
+        s = tree[c, TR_SEG]
+        p = tree[c, TR_NB]
+        k_cp = coupling[s, 0] if orow[seg_i[s, L.SI_A], OR_EFF] == c else coupling[s, 1]
+        node_acc[c, :] -= dmat[c] @ (k_cp @ node_acc[p])
+
+
+@jit_step
+def _apply(scale, nq, body_node, basis, dq, node_i, node_f, node_pos, node_acc, body_state, axis0, saved, tree,
+           orow):
+    """x += scale * dx for the anchor, and for every free node along the tree from its root: each node is placed
+    from its (already moved) parent along the segment's new direction at its linearly predicted length.
+
+    Why: a segment that turns by an angle t under x += dx lengthens by l t^2 / 2, which its axial stiffness turns
+    into a spurious tension EA t^2 / 2; on a slack loop that has to swing (current, a moved vessel) this confines
+    plain Newton to steps of a tenth of a degree. Placing nodes by direction and length keeps the linear model's
+    axial prediction; the mismatch gathers in the segments to prescribed ends, where Newton corrects it as a
+    linear, axial error.
+    """
+    if body_node >= 0:
+        for c in range(3):
+            body_state[L.BS_POS + c] += scale * dq[c]
+            axis0[c] = body_state[L.BS_AXIS + c]
+        phx = scale * (dq[3] * basis[0, 0] + dq[4] * basis[1, 0])
+        phy = scale * (dq[3] * basis[0, 1] + dq[4] * basis[1, 1])
+        phz = scale * (dq[3] * basis[0, 2] + dq[4] * basis[1, 2])
+        rotate_axis(body_state, axis0, phx, phy, phz, 1.0)
+        sp = node_f[body_node, L.NF_BODY_S]
+        for c in range(3):
+            node_pos[body_node, c] = body_state[L.BS_POS + c] + sp * body_state[L.BS_AXIS + c]
+    for k in range(nq - 1, -1, -1):
+        c = orow[k, OR_ORDER]
+        if tree[c, TR_DEG] != -1:
+            for i in range(3):
+                node_pos[c, i] += scale * node_acc[c, i]
+            continue
+        p = tree[c, TR_NB]
+        old_len = math.sqrt((saved[c, 0] - saved[p, 0]) ** 2 + (saved[c, 1] - saved[p, 1]) ** 2
+                            + (saved[c, 2] - saved[p, 2]) ** 2)
+        # predicted relative vector and length of the segment (linear in the step, parent's linear motion)
+        vx = saved[c, 0] - saved[p, 0] + scale * (node_acc[c, 0] - node_acc[p, 0])
+        vy = saved[c, 1] - saved[p, 1] + scale * (node_acc[c, 1] - node_acc[p, 1])
+        vz = saved[c, 2] - saved[p, 2] + scale * (node_acc[c, 2] - node_acc[p, 2])
+        new_len = math.sqrt(vx * vx + vy * vy + vz * vz)
+        target = old_len
+        if old_len > 0.0:
+            target += scale * ((saved[c, 0] - saved[p, 0]) * (node_acc[c, 0] - node_acc[p, 0])
+                               + (saved[c, 1] - saved[p, 1]) * (node_acc[c, 1] - node_acc[p, 1])
+                               + (saved[c, 2] - saved[p, 2]) * (node_acc[c, 2] - node_acc[p, 2])) / old_len
+        if new_len <= 0.0 or target <= 0.0:
+            for i in range(3):
+                node_pos[c, i] += scale * node_acc[c, i]
+            continue
+        f = target / new_len
+        node_pos[c, 0] = node_pos[p, 0] + vx * f
+        node_pos[c, 1] = node_pos[p, 1] + vy * f
+        node_pos[c, 2] = node_pos[p, 2] + vz * f
+
+
+@jit_step
+def newton_statics(ctl, max_iter, body_node, node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i,
+                   seg_f, mat_f, line_f, body_f, body_q, env_f, current_profile, tracks, node_force, node_mm,
+                   node_mass, node_contact, node_acc, seg_tension, body_load, body_acc, pos0, vel0, best_pos,
+                   best_body):
+    """Up to ``max_iter`` Newton iterations of the static problem from the current state, in place.
+
+    ``ctl`` (``C_*`` slots) carries the pseudo time step, the smoothing level, the tolerance and the step limit
+    in, and the iteration count, status and residual out, so that a long solve can be run in chunks (progress).
+    ``body_node``: the node attaching the lines to the anchor (the anchor is then solved for), or -1.
+    """
+    nn = node_i.shape[0]
+    tree = pos0.view(np.int64)
+    orow = vel0.view(np.int64)
+    for n in range(nn):
+        if node_i[n, L.NI_KIND] == L.NODE_FREE:
+            for c in range(3):
+                node_vel[n, c] = 0.0
+    build_tree(body_node, node_i, seg_i, tree, orow)
+    nq = order(body_node, node_i, seg_i, tree, orow)
+    dmat = np.zeros((nn, 3, 3))
+    coupling = np.zeros((seg_i.shape[0], 2, 3, 3))
+    saved = np.empty((nn, 3))
+    saved_body = np.empty(L.N_BODY_STATE)
+    basis = np.zeros((2, 3))
+    res_body = np.zeros(5)
+    dq = np.zeros(5)
+    axis0 = np.zeros(3)
+    tau = ctl[C_TAU]
+    tol = ctl[C_TOL]
+    env_f[L.EF_SLACK_SMOOTHING] = ctl[C_SMOOTHING]
+    norm2, worst = _residual(body_node, basis, res_body, node_pos, node_vel, body_state, body_active, node_i, node_f,
+                             seg_i, seg_f, mat_f, line_f, body_f, body_q, env_f, current_profile, tracks, node_force,
+                             node_mm, node_mass, node_contact, seg_tension, body_load, body_acc)
+    status = STATUS_RUNNING
+    if ctl[C_BEST] == 0.0 or norm2 < ctl[C_BEST]:
+        ctl[C_BEST] = norm2
+        best_pos[:, :] = node_pos
+        best_body[:] = body_state
+    for _ in range(max_iter):
+        if not (worst == worst):
+            status = STATUS_NONFINITE
+            break
+        smoothing = env_f[L.EF_SLACK_SMOOTHING]
+        final = smoothing <= SMOOTHING_FINAL * 1.0001
+        if worst < tol and final and ctl[C_LAST_STEP] < STEP_TOLERANCE_M:
+            status = STATUS_CONVERGED
+            break
+        if not final and (worst < 10.0 * tol or ctl[C_PHASE_IT] >= PHASE_ITERATIONS):
+            env_f[L.EF_SLACK_SMOOTHING] = max(0.1 * smoothing, SMOOTHING_FINAL)
+            ctl[C_PHASE_IT] = 0.0
+            norm2, worst = _residual(body_node, basis, res_body, node_pos, node_vel, body_state, body_active, node_i,
+                                     node_f, seg_i, seg_f, mat_f, line_f, body_f, body_q, env_f, current_profile,
+                                     tracks, node_force, node_mm, node_mass, node_contact, seg_tension, body_load,
+                                     body_acc)
+            ctl[C_BEST] = norm2
+            ctl[C_SINCE_BEST] = 0.0
+            best_pos[:, :] = node_pos
+            best_body[:] = body_state
+            continue
+        ctl[C_ITERATIONS] += 1.0
+        ctl[C_PHASE_IT] += 1.0
+        _newton_step(tau, nq, body_node, basis, res_body, dq, node_pos, body_state, node_f, seg_i, seg_f, mat_f,
+                     body_f, env_f, current_profile, node_force, node_mass, node_contact, node_acc, seg_tension,
+                     dmat, coupling, tree, orow)
+        biggest = 0.0
+        for n in range(nn):
+            if node_i[n, L.NI_KIND] == L.NODE_FREE:
+                for c in range(3):
+                    biggest = max(biggest, abs(node_acc[n, c]))
+        scale = 1.0
+        if body_node >= 0:
+            for c in range(3):
+                biggest = max(biggest, abs(dq[c]))
+            rot = math.sqrt(dq[3] * dq[3] + dq[4] * dq[4])
+            if rot > MAX_ROTATION_RAD:
+                scale = MAX_ROTATION_RAD / rot
+        if biggest * scale > ctl[C_MAX_STEP]:
+            scale = ctl[C_MAX_STEP] / biggest
+        if not (scale == scale) or not (biggest == biggest):
+            tau *= 0.25
+            continue
+        saved[:, :] = node_pos
+        saved_body[:] = body_state
+        _apply(scale, nq, body_node, basis, dq, node_i, node_f, node_pos, node_acc, body_state, axis0, saved, tree,
+               orow)
+        new2, new_worst = _residual(body_node, basis, res_body, node_pos, node_vel, body_state, body_active, node_i,
+                                    node_f, seg_i, seg_f, mat_f, line_f, body_f, body_q, env_f, current_profile,
+                                    tracks, node_force, node_mm, node_mass, node_contact, seg_tension, body_load,
+                                    body_acc)
+        if not (new2 == new2):
+            # not finite: back to the saved state with a shorter pseudo time step
+            node_pos[:, :] = saved
+            body_state[:] = saved_body
+            tau *= 0.25
+            norm2, worst = _residual(body_node, basis, res_body, node_pos, node_vel, body_state, body_active, node_i,
+                                     node_f, seg_i, seg_f, mat_f, line_f, body_f, body_q, env_f, current_profile,
+                                     tracks, node_force, node_mm, node_mass, node_contact, seg_tension, body_load,
+                                     body_acc)
+            continue
+        ctl[C_LAST_STEP] = biggest * scale
+        norm2 = new2
+        worst = new_worst
+        # non-monotone: the residual may grow for a few steps (the axial mismatch the placement gathers at the
+        # prescribed ends is corrected by the next step); without a new best for WATCHDOG_ITERATIONS, go back
+        # to the best state with a shorter pseudo time step
+        if norm2 < ctl[C_BEST]:
+            ctl[C_BEST] = norm2
+            ctl[C_SINCE_BEST] = 0.0
+            best_pos[:, :] = node_pos
+            best_body[:] = body_state
+            tau = min(tau * 4.0, TAU_MAX_S)
+        else:
+            ctl[C_SINCE_BEST] += 1.0
+            if ctl[C_SINCE_BEST] >= WATCHDOG_ITERATIONS:
+                node_pos[:, :] = best_pos
+                body_state[:] = best_body
+                tau *= 0.1
+                ctl[C_SINCE_BEST] = 0.0
+                norm2, worst = _residual(body_node, basis, res_body, node_pos, node_vel, body_state, body_active,
+                                         node_i, node_f, seg_i, seg_f, mat_f, line_f, body_f, body_q, env_f,
+                                         current_profile, tracks, node_force, node_mm, node_mass, node_contact,
+                                         seg_tension, body_load, body_acc)
+    ctl[C_TAU] = tau
+    ctl[C_SMOOTHING] = env_f[L.EF_SLACK_SMOOTHING]
+    ctl[C_STATUS] = status
+    ctl[C_RESIDUAL] = worst
+    env_f[L.EF_SLACK_SMOOTHING] = 0.0
+    return status
+
+
+def body_root(sim) -> int:
+    """The node that attaches the lines to the anchor when the anchor is a static unknown, else -1."""
+    if not sim.model.body_active:
+        return -1
+    body = np.nonzero(sim.state.node_i[:, L.NI_KIND] == L.NODE_BODY)[0]
+    return int(body[0]) if body.size else -1
+
+
+def n_static_dofs(sim) -> int:
+    """Number of unknowns of the static problem (3 per free node, 5 for a held anchor)."""
+    free = int(np.count_nonzero(sim.state.node_i[:, L.NI_KIND] == L.NODE_FREE))
+    return 3 * free + (5 if body_root(sim) >= 0 else 0)
+
+
+CHUNK_ITERATIONS = 25
+CURRENT_STEPS = 1  # current is applied in this many equal steps after the calm equilibrium
+NEWTON_BEFORE_RELAXATION = 12  # Newton iterations from the guess before relaxing instead
+NEWTON_AFTER_RELAXATION = 25
+RELAXATION_S = 20.0  # pseudo time of one relaxation round
+RELAXATION_DT_S = 0.25  # its implicit step: below the anchor's pendulum limit (explicit in the implicit step)
+PROGRESS_AFTER_S = 1.0
+
+
+def relax_implicitly(sim, duration_s: float, dt_s: float = RELAXATION_DT_S, chunk_steps: int = 4) -> None:
+    """Kinetic-damping dynamic relaxation with the implicit integrator: step the dynamic model from the current
+    state (vessels at their mean positions) and zero every velocity whenever the total kinetic energy starts to
+    fall (it has just passed an energy peak, the best estimate of the rest position along the dominant motion).
+    Robust from any state (the implicit step handles segments going slack and taut), linear in cost."""
+    st, m = sim.state, sim.model
+    saved = sim.dt, sim.integrator_code, sim.env_f[L.EF_SPEED_LIMIT], sim.env_f[L.EF_STRAIN_LIMIT]
+    sim.dt, sim.integrator_code = dt_s, INTEGRATOR_IMPLICIT_EULER
+    sim.env_f[L.EF_SPEED_LIMIT] = sim.env_f[L.EF_STRAIN_LIMIT] = 1e9
+    free = st.node_i[:, L.NI_KIND] == L.NODE_FREE
+    previous = 0.0
+    start = st.copy()
     try:
-        while smoothing > FINAL_SLACK_SMOOTHING * 1.0001:
-            sim.env_f[L.EF_SLACK_SMOOTHING] = smoothing
-            iterations += _solve_phase(sim, 10 * tol_rel, CONTINUATION_ITERATIONS, max_step_m, tau0_s,
-                                       strict=False).iterations
-            smoothing *= 0.1
-            tau0_s = 1e3
-        sim.env_f[L.EF_SLACK_SMOOTHING] = FINAL_SLACK_SMOOTHING
-        report = _solve_phase(sim, tol_rel, max_iter, max_step_m, tau0_s)
+        for _ in range(max(1, int(duration_s / (dt_s * chunk_steps)))):
+            st.t = 0.0
+            try:
+                sim.advance_to(chunk_steps * dt_s)
+            except SimulationDiverged:
+                # a blow-up of the pseudo dynamics (a fine mesh at a long step): start again at half the step
+                _restore(st, start)
+                sim.dt *= 0.5
+                if sim.dt < 1e-3:
+                    raise
+                previous = 0.0
+                continue
+            kinetic = float(np.sum(sim.work.node_mass[free] * np.sum(st.node_vel[free] ** 2, axis=1)))
+            if m.body_active:
+                kinetic += m.body_f[L.BF_MASS_AXIAL] * float(np.sum(st.body_state[L.BS_VEL:L.BS_VEL + 3] ** 2))
+            if kinetic < previous:
+                _stop(st)
+                previous = 0.0
+            else:
+                previous = kinetic
     finally:
-        sim.env_f[L.EF_SLACK_SMOOTHING] = 0.0
-    report.iterations += iterations
-    return report
+        sim.dt, sim.integrator_code, sim.env_f[L.EF_SPEED_LIMIT], sim.env_f[L.EF_STRAIN_LIMIT] = saved
+        st.t = 0.0
+        _stop(st)
 
 
-def _solve_phase(sim, tol_rel: float, max_iter: int, max_step_m: float, tau0_s: float,
-                 strict: bool = True) -> StaticsReport:
-    """One pseudo-transient Newton solve of the simulator's state, in place.
+def _restore(st, saved) -> None:
+    for name in ("node_pos", "node_vel", "body_state", "seg_f", "line_f"):
+        getattr(st, name)[...] = getattr(saved, name)
+
+
+def _stop(st) -> None:
+    st.node_vel[:] = 0.0
+    st.body_state[L.BS_VEL:L.BS_VEL + 3] = 0.0
+    st.body_state[L.BS_OMEGA:L.BS_OMEGA + 3] = 0.0
+
+
+def _run_chunk(sim, ctl: np.ndarray, max_iter: int, tol_rel: float, best: tuple[np.ndarray, np.ndarray]) -> int:
+    """Up to ``CHUNK_ITERATIONS`` Newton iterations of the simulator's state to ``tol_rel`` (``best``: scratch for
+    the best state so far)."""
+    st, m, w = sim.state, sim.model, sim.work
+    ctl[C_TOL] = tol_rel
+    return newton_statics(ctl, min(CHUNK_ITERATIONS, max_iter - int(ctl[C_ITERATIONS])), body_root(sim),
+                          st.node_pos, st.node_vel, st.body_state, m.body_active, st.node_i, st.node_f, st.seg_i,
+                          st.seg_f, m.mat_f, st.line_f, m.body_f, m.body_q, sim.env_f, m.current_profile, sim.tracks,
+                          w.node_force, w.node_mm, w.node_mass, w.node_contact, w.node_acc, w.seg_tension,
+                          w.body_load, w.body_acc, w.pos0, w.vel0, best[0], best[1])
+
+
+def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 150, max_step_m: float = 20.0,
+                      warm: bool = False, analytic_guess: bool = True, progress: bool = True) -> StaticsReport:
+    """Drive the simulator's current state to static equilibrium in place: :func:`solve_newton`, and where it
+    does not converge the slow, robust solver of ``physics/statics_relaxation.py`` from the same start.
+
+    Parameters and exceptions as :func:`solve_newton`; the report's ``method`` says which solver finished.
+    """
+    start = sim.state.copy()
+    try:
+        return solve_newton(sim, tol_rel, max_iter, max_step_m, warm, analytic_guess, progress)
+    except (StaticsNotConverged, SimulationDiverged):
+        _restore(sim.state, start)
+        sim.state.t = start.t
+        return statics_relaxation.solve_equilibrium(sim, tol_rel=tol_rel, warm=warm, analytic_guess=analytic_guess)
+
+
+def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = 150, max_step_m: float = 20.0,
+                      warm: bool = False, analytic_guess: bool = True, progress: bool = True) -> StaticsReport:
+    """Drive the simulator's current state to static equilibrium in place.
 
     Parameters
     ----------
     sim : Simulator
-        Its state is the first guess and receives the solution.
     tol_rel : float
-        Converged when every dof's residual is below ``tol_rel`` times its own weight scale (node weight,
-        anchor weight, anchor weight times length for moments).
+        Converged when every unknown's residual is below ``tol_rel`` times its weight scale (node weight;
+        anchor weight, and anchor weight times length for its moments).
     max_iter : int
+        Newton iterations at most.
     max_step_m : float
         Largest node move per iteration [m].
-    tau0_s : float
-        Initial pseudo time step [s].
-    strict : bool
-        Raise when not converged (otherwise return the state reached, for continuation steps).
+    warm : bool
+        Start from the current state on the final smoothing with a long pseudo time step (a small change of an
+        equilibrium, e.g. a corrected wire length).
+    analytic_guess : bool
+        Start from the elastic-catenary guess (:func:`moor_env.physics.statics_guess.first_guess`); otherwise
+        from the current state, however poor.
+    progress : bool
+        Show a progress bar once a solve has taken more than a second.
 
     Raises
     ------
     StaticsNotConverged
+    moor_env.errors.NoEquilibrium
+        From the first guess: the scene has no equilibrium (named cause and key).
     """
-    prob = _Problem(sim)
-    if prob.n_dofs == 0:
-        return StaticsReport(0, 0.0, 0.0, 0)
-    x = prob.get_x()
-    axis0 = sim.state.body_state[L.BS_AXIS: L.BS_AXIS + 3].copy()
-    r = prob.residual()
-    mass, weight = prob.scales()
-    tau = tau0_s
-    step_norm = math.inf
-    for it in range(1, max_iter + 1):
-        ratio = np.abs(r) / weight
-        if ratio.max() < tol_rel and step_norm < 1e-4:
-            _commit_axis(prob, x, axis0, sim)
-            return StaticsReport(it - 1, float(np.abs(r).max()), step_norm, prob.n_dofs)
-        jac = prob.jacobian(x, r, axis0, 1e-6, 1e-7)
-        lhs = sp.diags(mass / tau**2) - jac
-        dx = spla.spsolve(lhs.tocsc(), r)
-        if not np.all(np.isfinite(dx)):
-            tau *= 0.25
-            continue
-        node_step = np.abs(dx[: prob.n_node_dofs]).max(initial=0.0)
-        body_step = np.abs(dx[prob.n_node_dofs:]).max(initial=0.0)
-        biggest = max(node_step, body_step)
-        if biggest > max_step_m:
-            dx *= max_step_m / biggest
-        x_new = x + dx
-        prob.set_x(x_new, axis0)
-        r_new = prob.residual()
-        old, new = np.linalg.norm(r / weight), np.linalg.norm(r_new / weight)
-        if not np.isfinite(new) or new > 4.0 * old + 1e-12:
-            tau *= 0.25
-            prob.set_x(x, axis0)
-            r = prob.residual()
-            continue
-        x, r = x_new, r_new
-        step_norm = float(np.abs(dx).max())
-        tau = min(tau * max(min(old / max(new, 1e-300), 10.0), 0.5), 1e12)
-        if prob.body:
-            _commit_axis(prob, x, axis0, sim)
-            axis0 = sim.state.body_state[L.BS_AXIS: L.BS_AXIS + 3].copy()
-            x[prob.n_node_dofs + 3:] = 0.0
-            prob._set_basis()
-            r = prob.residual()
-    if not strict:
-        return StaticsReport(max_iter, float(np.abs(r).max()), step_norm, prob.n_dofs)
-    residual_rel = float(np.max(np.abs(r) / weight))
-    raise StaticsNotConverged(
-        f"static equilibrium not reached in {max_iter} iterations (largest residual/weight {residual_rel:.3g})",
-        residual_rel)
-
-
-def relax_dynamically(sim, max_time_s: float = 120.0, chunk_steps: int = 25, tol_rel: float = 5e-3) -> float:
-    """Kinetic-damping dynamic relaxation with the dynamic kernel: integrate from the current state and zero
-    every velocity whenever the total kinetic energy starts to fall (it has just passed an energy peak, the
-    best estimate of the rest position along the dominant motion). Robust from any guess, linear in cost;
-    used when Newton cannot start from the guess.
-
-    Returns the simulated relaxation time [s] used. The state's time and the blow-up limits are restored.
-    """
-    st = sim.state
-    limits = sim.env_f[L.EF_SPEED_LIMIT], sim.env_f[L.EF_STRAIN_LIMIT]
-    sim.env_f[L.EF_SPEED_LIMIT] = 1e9
-    sim.env_f[L.EF_STRAIN_LIMIT] = 1e9
-    prob = _Problem(sim)
-    previous = 0.0
-    elapsed = 0.0
+    n_dofs = n_static_dofs(sim)
+    if n_dofs == 0:  # nothing to solve (e.g. an anchor held at its drop height, no lines)
+        return StaticsReport(0, 0.0, 0.0, 0, "newton")
+    if analytic_guess and not warm:
+        first_guess(sim)
+    ctl = np.zeros(N_CTL)
+    ctl[C_TAU] = 1e3 if warm else TAU_START_S
+    ctl[C_SMOOTHING] = SMOOTHING_FINAL if warm else SMOOTHING_START
+    ctl[C_TOL] = tol_rel
+    ctl[C_MAX_STEP] = max_step_m
+    ctl[C_LAST_STEP] = math.inf
+    best = (np.empty_like(sim.state.node_pos), np.empty(L.N_BODY_STATE))
+    current = float(sim.env_f[L.EF_CUR_SCALE])
+    ramp = [current] if warm or current == 0.0 else [current * k / CURRENT_STEPS for k in range(CURRENT_STEPS + 1)]
+    t0 = time.perf_counter()
+    bar = None
     try:
-        while elapsed < max_time_s:
-            st.t = 0.0  # vessels stay at their mean positions: no wave ramp, no spacing move
-            sim.advance_to(chunk_steps * sim.dt)
-            elapsed += chunk_steps * sim.dt
-            free = st.node_i[:, L.NI_KIND] == L.NODE_FREE
-            kinetic = float(np.sum(sim.work.node_mass[free] * np.sum(st.node_vel[free] ** 2, axis=1)))
-            if sim.model.body_active:
-                kinetic += sim.model.body_f[L.BF_MASS_AXIAL] * float(st.body_state[L.BS_VEL:L.BS_VEL + 3] @ st.body_state[L.BS_VEL:L.BS_VEL + 3])
-            if kinetic < previous:
-                st.node_vel[:] = 0.0
-                st.body_state[L.BS_VEL:L.BS_VEL + 3] = 0.0
-                st.body_state[L.BS_OMEGA:L.BS_OMEGA + 3] = 0.0
-                previous = 0.0
-                r = prob.residual()
-                _, weight = prob.scales()
-                if np.max(np.abs(r) / weight) < tol_rel:
+        for stage, scale in enumerate(ramp):
+            sim.env_f[L.EF_CUR_SCALE] = scale
+            last = stage == len(ramp) - 1
+            ctl[C_STATUS] = STATUS_RUNNING
+            ctl[C_BEST] = 0.0
+            if stage > 0:  # each current step starts near the last equilibrium: Newton on the final law
+                ctl[C_TAU] = max(ctl[C_TAU], 1e3)
+            budget = NEWTON_BEFORE_RELAXATION
+            while ctl[C_ITERATIONS] < max_iter:
+                status = _run_chunk(sim, ctl, min(max_iter, int(ctl[C_ITERATIONS]) + budget),
+                                    tol_rel if last else 10.0 * tol_rel, best)
+                if status == STATUS_CONVERGED:
                     break
-            else:
-                previous = kinetic
-    finally:
-        sim.env_f[L.EF_SPEED_LIMIT], sim.env_f[L.EF_STRAIN_LIMIT] = limits
-        st.t = 0.0
-        st.node_vel[:] = 0.0
-        st.body_state[L.BS_VEL:L.BS_VEL + 3] = 0.0
-        st.body_state[L.BS_OMEGA:L.BS_OMEGA + 3] = 0.0
-    return elapsed
-
-
-def _commit_axis(prob: _Problem, x: np.ndarray, axis0: np.ndarray, sim) -> None:
-    prob.set_x(x, axis0)
-    if prob.body:
-        sim.state.body_state[L.BS_OMEGA: L.BS_OMEGA + 3] = 0.0
-
-
-# --- first guesses from the analytic elastic catenary ----------------------------------------------------------
-def _line_sections(sim, line_name: str) -> tuple[list, np.ndarray]:
-    """Catenary sections and the unstretched arc length of each interior node of a line (bottom to top)."""
-    st, m = sim.state, sim.model
-    idx = m.lines[line_name].index
-    start, nseg = st.line_i[idx, L.LI_SEG_START], st.line_i[idx, L.LI_NSEG]
-    g = sim.env_f[L.EF_G]
-    sections: list = []
-    for s in range(start, start + nseg):
-        mat = st.seg_i[s, L.SI_MAT]
-        w = m.mat_f[mat, L.MF_SUBMERGED] * g
-        ea = m.mat_f[mat, L.MF_EA]
-        if sections and sections[-1].weight_n_m == w and sections[-1].ea_n == ea:
-            sections[-1] = Section(w, ea, sections[-1].length_m + st.seg_f[s, L.SF_L0])
-        else:
-            sections.append(Section(w, ea, st.seg_f[s, L.SF_L0]))
-    arcs = np.cumsum(st.seg_f[start:start + nseg, L.SF_L0])[:-1]
-    return sections, arcs
-
-
-def _place_line(sim, line_name: str, origin: np.ndarray, h: float, v_a: float, direction: float = 1.0) -> None:
-    """Put a line's interior nodes on the catenary (H, V_A) starting at ``origin`` (its bottom end)."""
-    st, m = sim.state, sim.model
-    sections, arcs = _line_sections(sim, line_name)
-    x, z = shape(h, v_a, sections, arcs)
-    idx = m.lines[line_name].index
-    nodes = st.line_i[idx, L.LI_NODE_START] + np.arange(arcs.size)
-    st.node_pos[nodes, 0] = origin[0] + direction * x
-    st.node_pos[nodes, 1] = origin[1]
-    st.node_pos[nodes, 2] = origin[2] + z
-
-
-def first_guess(sim) -> None:
-    """Set the simulator's node positions and anchor pose to an analytic estimate of the equilibrium
-    (elastic catenaries without current), so that the Newton solve starts with every line in tension."""
-    m = sim.model
-    if m.scene.kind == "catenary_line":
-        _guess_catenary_line(sim)
-    elif m.release_node >= 0:
-        _guess_installation(sim)
-
-
-def _guess_catenary_line(sim) -> None:
-    st, m = sim.state, sim.model
-    idx = m.lines["line"].index
-    a = st.node_pos[st.line_i[idx, L.LI_BOTTOM]].copy()
-    b = st.node_pos[st.line_i[idx, L.LI_TOP]].copy()
-    dx, dz = float(b[0] - a[0]), float(b[2] - a[2])
-    sections, arcs = _line_sections(sim, "line")
-    grounded = solve_grounded(dx, dz, sections) if abs(a[2] + sim.env_f[L.EF_DEPTH]) < 1e-6 else None
-    if grounded is None:
-        h, v_a = solve_suspended(dx, dz, sections)
-        _place_line(sim, "line", a, h, v_a)
-        return
-    h, length_on_bottom = grounded
-    rest = trim(sections, length_on_bottom)
-    x_s, z_s = shape(h, 0.0, rest, np.maximum(arcs - length_on_bottom, 0.0))
-    ea0 = sections[0].ea_n
-    on_bottom = arcs <= length_on_bottom
-    x = np.where(on_bottom, arcs * (1.0 + h / ea0), length_on_bottom * (1.0 + h / ea0) + x_s)
-    z = np.where(on_bottom, 0.0, z_s)
-    nodes = st.line_i[idx, L.LI_NODE_START] + np.arange(arcs.size)
-    st.node_pos[nodes, 0] = a[0] + x
-    st.node_pos[nodes, 2] = a[2] + z
-
-
-def change_line_length(state, line: int, delta_m: float) -> None:
-    """Lengthen (or shorten) a line's unstretched length by ``delta_m`` by scaling all its segments alike,
-    so that no segment leaves the stable length range however large the change (e.g. a 15 m wire stretch
-    over 10 m segments)."""
-    start, nseg = state.line_i[line, L.LI_SEG_START], state.line_i[line, L.LI_NSEG]
-    lengths = state.seg_f[start:start + nseg, L.SF_L0]
-    lengths *= 1.0 + delta_m / lengths.sum()
-
-
-def _guess_installation(sim) -> None:
-    st, m = sim.state, sim.model
-    g = sim.env_f[L.EF_G]
-    rho = sim.env_f[L.EF_RHO]
-    release = st.node_pos[m.release_node].copy()
-    anchor_weight = m.anchor_submerged_mass_kg * g
-    vc_sections, _ = _line_sections(sim, "vertical_chain")
-    hang = anchor_weight + sum(s.weight_n_m * s.length_m for s in vc_sections)
-    h_m = v_m = 0.0
-    if m.wire_end_node >= 0:
-        ru = st.node_f[m.wire_end_node]
-        hang += (ru[L.NF_POINT_MASS] - rho * ru[L.NF_POINT_VOLUME]) * g
-        wire = m.lines["wire"].index
-        top_a = st.node_pos[st.line_i[wire, L.LI_TOP]]
-        target_tip_z = -sim.env_f[L.EF_DEPTH] + m.scene.installation.drop_height_m
-        vc_total = sum(s.length_m for s in vc_sections)
-        _, vc_rise = shape(0.0, anchor_weight, vc_sections, np.array([vc_total]))
-        for _ in range(50):
-            wire_sections, _ = _line_sections(sim, "wire")
-            if "mooring_line" in m.lines:
-                ml_sections, _ = _line_sections(sim, "mooring_line")
-                top_b = st.node_pos[st.line_i[m.lines["mooring_line"].index, L.LI_TOP]]
-                h_m, v_m = solve_suspended(float(top_b[0] - release[0]), float(top_b[2] - release[2]), ml_sections)
-            # the wire holds the release node against the chain below and the mooring line beside it
-            h_w, v_w = h_m, hang - v_m
-            x_w, z_w = shape(h_w, v_w, wire_sections, np.array([sum(s.length_m for s in wire_sections)]))
-            new = np.array([top_a[0] + x_w[0], 0.0, top_a[2] - z_w[0]])
-            moved = float(np.linalg.norm(new - release))
-            release = new
-            tip_error = release[2] - vc_rise[0] - m.body_f[L.BF_LENGTH] - target_tip_z
-            change_line_length(st, wire, tip_error)
-            if moved < 1e-7 and abs(tip_error) < 1e-7:
+                if progress and bar is None and time.perf_counter() - t0 > PROGRESS_AFTER_S:
+                    bar = tqdm(total=max_iter, desc="statics", unit="it", leave=False)
+                if bar is not None:
+                    bar.n = int(ctl[C_ITERATIONS])
+                    bar.set_postfix(residual=f"{ctl[C_RESIDUAL]:.2g}")
+                    bar.refresh()
+                if ctl[C_PHASE_IT] >= budget or status == STATUS_NONFINITE:
+                    # Newton's radius is small where a slack loop must turn (a segment's length grows with the
+                    # square of its rotation, times EA): relax the slow modes dynamically, then Newton again
+                    relax_implicitly(sim, RELAXATION_S)
+                    ctl[C_TAU] = TAU_START_S
+                    ctl[C_PHASE_IT] = 0.0
+                    ctl[C_BEST] = 0.0
+                    ctl[C_STATUS] = STATUS_RUNNING
+                    budget = NEWTON_AFTER_RELAXATION
+            if ctl[C_STATUS] != STATUS_CONVERGED:
                 break
-        st.node_pos[m.release_node] = release
-        _place_line(sim, "wire", release, h_w, v_w, direction=-1.0)
-    if "mooring_line" in m.lines:
-        _place_line(sim, "mooring_line", release, h_m, v_m)
-    # vertical chain hangs straight below the release point, stretched by the anchor and its own weight
-    total = sum(s.length_m for s in vc_sections)
-    _, z_top = shape(0.0, anchor_weight, vc_sections, np.array([total]))
-    back = release - np.array([0.0, 0.0, z_top[0]])
-    _place_line(sim, "vertical_chain", back, 0.0, anchor_weight)
-    b = st.body_state
-    b[L.BS_POS: L.BS_POS + 3] = back - m.body_f[L.BF_S_BACK] * b[L.BS_AXIS: L.BS_AXIS + 3]
+    finally:
+        sim.env_f[L.EF_CUR_SCALE] = current
+        if bar is not None:
+            bar.close()
+        _stop(sim.state)
+        sim.evaluate_loads()
+    iterations = int(ctl[C_ITERATIONS])
+    if ctl[C_STATUS] != STATUS_CONVERGED:
+        reason = "a non-finite residual" if ctl[C_STATUS] == STATUS_NONFINITE else f"{iterations} iterations"
+        raise StaticsNotConverged(f"static equilibrium not reached after {reason} (largest residual/weight "
+                                  f"{ctl[C_RESIDUAL]:.3g}, tolerance {tol_rel:g})", float(ctl[C_RESIDUAL]))
+    return StaticsReport(iterations, float(ctl[C_RESIDUAL]), 0.0, n_dofs, "newton")

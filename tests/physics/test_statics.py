@@ -122,7 +122,7 @@ def test_relaxation_rounds_continue_only_while_the_residual_shrinks(monkeypatch,
     final error carries it."""
     from moor_env import Simulator, compile_scene
     from moor_env.errors import StaticsNotConverged
-    from moor_env.physics import statics
+    from moor_env.physics import statics_relaxation as statics
 
     queue = [0.5, *residuals]  # the first Newton attempt from the guess fails too
     calls = []
@@ -145,3 +145,113 @@ def test_relaxation_rounds_continue_only_while_the_residual_shrinks(monkeypatch,
         with pytest.raises(StaticsNotConverged, match=f"after {max(10, len(residuals))} relaxation rounds") as info:
             statics.solve_equilibrium(sim)
         assert info.value.residual_rel == pytest.approx(min(residuals))
+
+
+# --- the Newton solver (moor_env.physics.statics) ----------------------------------------------------------------
+def _residual_ratio(static) -> float:
+    """Largest free-node residual over the node's weight at the solution, on the smoothed law the solver ends on."""
+    from moor_env.physics.statics import SMOOTHING_FINAL
+
+    sim = static.simulator
+    sim.env_f[L.EF_SLACK_SMOOTHING] = SMOOTHING_FINAL
+    try:
+        sim.evaluate_loads()
+    finally:
+        sim.env_f[L.EF_SLACK_SMOOTHING] = 0.0
+    free = sim.state.node_i[:, L.NI_KIND] == L.NODE_FREE
+    weight = sim.work.node_mass[free] * sim.env_f[L.EF_G]
+    return float(np.max(np.abs(sim.work.node_force[free]) / weight[:, None]))
+
+
+def _random_scenes(n: int, seed: int) -> list[dict]:
+    rng = np.random.default_rng(seed)
+    scenes = []
+    for _ in range(n):
+        depth = float(rng.uniform(300.0, 1500.0))
+        scenes.append({"water_depth_m": depth, "vessel_spacing_m": float(rng.uniform(0.05, 0.4) * depth),
+                       "mooring_line_length_m": float(rng.uniform(1.0, 1.2) * depth),
+                       "vertical_chain_length_m": float(rng.uniform(5.0, 60.0)),
+                       "drop_height_m": float(rng.uniform(30.0, 120.0)),
+                       "current_scale": float(rng.choice([0.0, rng.uniform(0.0, 1.5)])),
+                       "current_direction_deg": float(rng.uniform(0.0, 360.0)),
+                       "anchor_mass_scale": float(rng.uniform(0.9, 1.1)), "fidelity": "fast"})
+    return scenes
+
+
+@pytest.mark.parametrize("overrides", _random_scenes(6, seed=3))
+def test_equilibrium_residual_on_random_scenes(overrides):
+    """Property (seeded draw over the statics benchmark's ranges): a scene either has no equilibrium (refused with
+    a named key) or its solution's residual is below the solver's tolerance, 1e-4 of every node's weight, with the
+    tip at the drop height within 1 mm."""
+    from moor_env.errors import NoEquilibrium
+
+    try:
+        static = solve_statics(load_scene("gjoa-500", overrides), progress=False)
+    except NoEquilibrium as exc:
+        assert exc.key.startswith("installation.")
+        return
+    assert _residual_ratio(static) < 1e-4
+    assert static.tip_height_above_seabed_m == pytest.approx(overrides["drop_height_m"], abs=1e-3)
+
+
+@pytest.mark.parametrize("overrides", [
+    {"fidelity": "fast"}, {"fidelity": "default"}, {"fidelity": "accurate"},
+    {"water_depth_m": 1500.0, "mooring_line_length_m": 1540.0, "vessel_spacing_m": 150.0, "fidelity": "fast"},
+])
+def test_newton_matches_the_relaxation_solver(overrides):
+    """Reference: the independent fallback solver (finite-difference Jacobian and dynamic relaxation,
+    ``physics/statics_relaxation.py``) on the same discrete model. Tolerances: release point 1 cm, top tensions
+    0.1 %; the Newton solver finishes in a few iterations from its catenary guess."""
+    from moor_env import Simulator, compile_scene
+    from moor_env.physics.statics_relaxation import solve as relaxation_solve
+
+    scene = load_scene("gjoa-500", overrides)
+    static = solve_statics(scene, progress=False)
+    assert static.method == "newton"
+    assert static.iterations <= 10
+    release, tensions, _ = relaxation_solve(Simulator(compile_scene(scene)))
+    assert np.linalg.norm(np.subtract(static.release_point_m, release)) < 0.01
+    for line, tension in tensions.items():
+        assert static.top_tensions_n[line] == pytest.approx(tension, rel=1e-3)
+
+
+@pytest.mark.parametrize("overrides", [
+    {"vessel_spacing_m": 0.0},  # the loop hangs straight down from both ends
+    {"mooring_line_length_m": 640.0, "vessel_spacing_m": 30.0},  # very slack
+    {"current_scale": 1.5, "current_direction_deg": 180.0},  # current against the loop
+    {"water_depth_m": 1500.0, "mooring_line_length_m": 1540.0, "vessel_spacing_m": 300.0},  # deep and wide
+    {"vessel_spacing_m": 330.0, "mooring_line_length_m": 560.0},  # taut
+])
+def test_hard_scenes_converge(overrides):
+    """Hard geometries converge (Newton, or the fallback where Newton's rounds do not) to the residual
+    tolerance, or are refused as having no equilibrium."""
+    from moor_env.errors import NoEquilibrium
+
+    try:
+        static = solve_statics(load_scene("gjoa-500", {"fidelity": "fast", **overrides}), progress=False)
+    except NoEquilibrium:
+        return
+    assert _residual_ratio(static) < 1e-4
+
+
+def test_statics_are_deterministic():
+    """Same scene, same equilibrium bit for bit."""
+    scene = load_scene("gjoa-500", {"current_scale": 0.7, "fidelity": "fast"})
+    a = solve_statics(scene, progress=False).simulator.state
+    b = solve_statics(scene, progress=False).simulator.state
+    assert np.array_equal(a.node_pos, b.node_pos) and np.array_equal(a.body_state, b.body_state)
+
+
+@pytest.mark.parametrize(("overrides", "key", "cause"), [
+    ({"vessel_spacing_m": 400.0, "mooring_line_length_m": 450.0}, "installation.mooring_line_length_m", "reach"),
+    ({"vessel_spacing_m": 10.0, "mooring_line_length_m": 750.0}, "installation.mooring_line_length_m", "fibre"),
+    ({"drop_height_m": 480.0}, "installation.drop_height_m", "allowed"),
+])
+def test_scenes_without_equilibrium_are_refused(overrides, key, cause):
+    """A mooring line too short to reach the second vessel, one so long that its fibre rope rests on the seabed,
+    and a drop height the water depth cannot hold are refused at once with the key to change and the cause."""
+    from moor_env.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=cause) as info:
+        solve_statics(load_scene("gjoa-500", {"fidelity": "fast", **overrides}), progress=False)
+    assert info.value.key == key

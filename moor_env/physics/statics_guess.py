@@ -1,0 +1,265 @@
+"""First guess of the static solver: every line on its elastic catenary, the anchor hanging below its chain.
+
+The installation's lines meet at the release point R: the vertical chain hangs from it with the anchor, the
+mooring line runs from it to the second vessel, and the wire holds it from the installation vessel. R's
+horizontal position follows from the balance of the wire and the mooring line (each a catenary with the same
+horizontal force), its height from the drop height (anchor tip ``drop_height_m`` above the seabed); the wire's
+unstretched length is set so that it reaches there. A few fixed-point rounds of this balance cost well under a
+millisecond (``catenary.hang_line``). Current is left to the Newton solve.
+
+Scenes with no equilibrium are refused here, before any Newton iteration (:class:`moor_env.errors.NoEquilibrium`):
+a release point that the drop height puts above the installation vessel's fairlead, and a mooring line so short
+that it would have to carry more than its minimum breaking load.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from moor_env.errors import NoEquilibrium
+from moor_env.physics import layout as L
+from moor_env.physics.catenary import discrete_hang, hang_line, walk
+from moor_env.physics.integrate import set_constrained_nodes
+
+BALANCE_ROUNDS = 60
+MIN_WIRE_M = 1.0  # shortest wire the solver accepts between the installation vessel and the release point
+
+
+def line_arrays(sim, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Sections of a line from its bottom end (weight [N/m], EA [N], length [m], MBL [N], material index) and the
+    unstretched arc length of each interior node from the bottom [m]."""
+    st, m = sim.state, sim.model
+    idx = m.lines[name].index
+    start, nseg = st.line_i[idx, L.LI_SEG_START], st.line_i[idx, L.LI_NSEG]
+    mats = st.seg_i[start:start + nseg, L.SI_MAT]
+    lengths = st.seg_f[start:start + nseg, L.SF_L0]
+    breaks = np.nonzero(np.diff(mats))[0] + 1
+    first = np.concatenate([[0], breaks])
+    sec_mat = mats[first]
+    sec_len = np.add.reduceat(lengths, first)
+    g = sim.env_f[L.EF_G]
+    sec_w = m.mat_f[sec_mat, L.MF_SUBMERGED] * g
+    sec_ea = m.mat_f[sec_mat, L.MF_EA]
+    arcs = np.cumsum(lengths)[:-1]
+    return sec_w, sec_ea, sec_len, sec_mat, arcs
+
+
+def _interior_nodes(sim, name: str) -> np.ndarray:
+    st, m = sim.state, sim.model
+    idx = m.lines[name].index
+    return st.line_i[idx, L.LI_NODE_START] + np.arange(st.line_i[idx, L.LI_NSEG] - 1)
+
+
+def _hang(sim, name: str, a: np.ndarray, b: np.ndarray, place: bool) -> tuple[float, float, float]:
+    """Hang a line from point a (its bottom end) to b; returns (H, V_A, top tension) [N] and, with ``place``,
+    puts its interior nodes on the shape: the discrete model's own equilibrium where the line hangs free (its
+    segments are chords, shorter than the arcs of a tightly curved catenary), the continuous catenary where it
+    touches the seabed."""
+    sec_w, sec_ea, sec_len, _, arcs = line_arrays(sim, name)
+    horizontal = b[:2] - a[:2]
+    dx = float(np.hypot(*horizontal))
+    u = horizontal / dx if dx > 1e-9 else np.array([1.0, 0.0])
+    seabed_dz = -sim.env_f[L.EF_DEPTH] - float(a[2])
+    out = np.zeros((arcs.size, 2))
+    dz = float(b[2] - a[2])
+    h, v_a, mode = hang_line(dx, dz, min(seabed_dz, 0.0), sec_w, sec_ea, sec_len, arcs, out)
+    if place:
+        if mode == 0:
+            node_w, seg_l0, seg_ea = _lumped(sim, name)
+            walked = np.zeros((seg_l0.size, 2))
+            h_d, v_d, ok = discrete_hang(dx, dz, h, v_a, node_w, seg_l0, seg_ea, walked)
+            if ok and np.min(walked[:, 1]) >= seabed_dz:
+                out[:] = walked[:-1]
+        nodes = _interior_nodes(sim, name)
+        pos = sim.state.node_pos
+        pos[nodes, 0] = a[0] + u[0] * out[:, 0]
+        pos[nodes, 1] = a[1] + u[1] * out[:, 0]
+        pos[nodes, 2] = a[2] + out[:, 1]
+        _sink_into_seabed(sim, name, nodes, arcs, sec_w, sec_len)
+    top = math.hypot(h, v_a + float(np.sum(sec_w * sec_len)))
+    return h, v_a, top
+
+
+def _lumped(sim, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per segment of a line from its bottom: weight of the node at its start [N] (half of each neighbouring
+    segment's submerged weight), unstretched length [m], EA [N]."""
+    st, m = sim.state, sim.model
+    idx = m.lines[name].index
+    start, nseg = st.line_i[idx, L.LI_SEG_START], st.line_i[idx, L.LI_NSEG]
+    mats = st.seg_i[start:start + nseg, L.SI_MAT]
+    seg_l0 = st.seg_f[start:start + nseg, L.SF_L0].copy()
+    half = 0.5 * m.mat_f[mats, L.MF_SUBMERGED] * sim.env_f[L.EF_G] * seg_l0
+    node_w = np.zeros(nseg)
+    node_w[1:] = half[:-1] + half[1:]
+    return node_w, seg_l0, m.mat_f[mats, L.MF_EA].copy()
+
+
+def _sink_into_seabed(sim, name: str, nodes: np.ndarray, arcs: np.ndarray, sec_w: np.ndarray,
+                      sec_len: np.ndarray) -> None:
+    """Lower the nodes laid on the seabed by the penetration that carries their weight (w / (k_bot D))."""
+    seabed = -sim.env_f[L.EF_DEPTH]
+    on = sim.state.node_pos[nodes, 2] <= seabed + 1e-9
+    if not np.any(on):
+        return
+    _, _, _, sec_mat, _ = line_arrays(sim, name)
+    section = np.minimum(np.searchsorted(np.cumsum(sec_len), arcs), sec_len.size - 1)
+    diameter = sim.model.mat_f[sec_mat[section], L.MF_D]
+    penetration = sec_w[section] / (sim.env_f[L.EF_KBOT] * np.maximum(diameter, 1e-6))
+    sim.state.node_pos[nodes[on], 2] = seabed - penetration[on]
+
+
+def _hang_vertical(sim, name: str, bottom: np.ndarray, bottom_force_n: float) -> float:
+    """Hang a line straight up from ``bottom`` carrying ``bottom_force_n`` there; returns its stretched height."""
+    sec_w, sec_ea, sec_len, _, arcs = line_arrays(sim, name)
+    nodes = _interior_nodes(sim, name)
+    pos = sim.state.node_pos
+    for node, arc in zip(nodes, arcs, strict=True):
+        pos[node] = bottom + np.array([0.0, 0.0, walk(0.0, bottom_force_n, sec_w, sec_ea, sec_len, 0.0, arc)[1]])
+    return walk(0.0, bottom_force_n, sec_w, sec_ea, sec_len, 0.0, float(np.sum(sec_len)))[1]
+
+
+def first_guess(sim) -> None:
+    """Set the simulator's node positions and anchor pose to the elastic-catenary estimate of the equilibrium.
+
+    Raises
+    ------
+    NoEquilibrium
+        The scene has none (the key to change is named).
+    """
+    st = sim.state
+    set_constrained_nodes(st.t, st.node_pos, st.node_vel, st.body_state, st.node_i, st.node_f, sim.tracks, sim.env_f)
+    if sim.model.scene.kind == "catenary_line":
+        line = sim.model.lines["line"].index
+        _hang(sim, "line", st.node_pos[st.line_i[line, L.LI_BOTTOM]].copy(),
+              st.node_pos[st.line_i[line, L.LI_TOP]].copy(), place=True)
+    elif sim.model.release_node >= 0:
+        _guess_installation(sim)
+
+
+def _guess_installation(sim) -> None:
+    st, m = sim.state, sim.model
+    sc = m.scene
+    g = sim.env_f[L.EF_G]
+    anchor_weight = m.anchor_submerged_mass_kg * g
+    sec_w, sec_ea, sec_len, _, _ = line_arrays(sim, "vertical_chain")
+    vc_rise = walk(0.0, anchor_weight, sec_w, sec_ea, sec_len, 0.0, float(np.sum(sec_len)))[1]
+    hang = anchor_weight + float(np.sum(sec_w * sec_len))
+    target_z = -sim.env_f[L.EF_DEPTH] + sc.installation.drop_height_m + m.body_f[L.BF_LENGTH] + vc_rise
+    release = st.node_pos[m.release_node].copy()
+    if m.wire_end_node >= 0:
+        rho = sim.env_f[L.EF_RHO]
+        unit = st.node_f[m.wire_end_node]
+        hang += (unit[L.NF_POINT_MASS] - rho * unit[L.NF_POINT_VOLUME]) * g
+        release = _balance_release_point(sim, release, target_z, hang)
+    else:
+        release[2] = target_z  # the held chain top is placed so that the tip hangs at the drop height
+        if "mooring_line" in m.lines:
+            _check_mooring_line(sim, release)
+    st.node_pos[m.release_node] = release
+    if "mooring_line" in m.lines:
+        _hang(sim, "mooring_line", release, _top(sim, "mooring_line"), place=True)
+    back = release - np.array([0.0, 0.0, vc_rise])
+    _hang_vertical(sim, "vertical_chain", back, anchor_weight)
+    b = st.body_state
+    b[L.BS_AXIS: L.BS_AXIS + 3] = (0.0, 0.0, -1.0)
+    b[L.BS_POS: L.BS_POS + 3] = back - m.body_f[L.BF_S_BACK] * b[L.BS_AXIS: L.BS_AXIS + 3]
+    b[L.BS_VEL: L.BS_VEL + 3] = 0.0
+    b[L.BS_OMEGA: L.BS_OMEGA + 3] = 0.0
+    set_constrained_nodes(st.t, st.node_pos, st.node_vel, st.body_state, st.node_i, st.node_f, sim.tracks, sim.env_f)
+
+
+def _top(sim, name: str) -> np.ndarray:
+    st = sim.state
+    return st.node_pos[st.line_i[sim.model.lines[name].index, L.LI_TOP]].copy()
+
+
+def _check_mooring_line(sim, release: np.ndarray) -> tuple[float, float]:
+    """(H, V_A) of the mooring line hung from ``release``; refuses a line that would exceed its MBL."""
+    h, v_a, top = _hang(sim, "mooring_line", release, _top(sim, "mooring_line"), place=False)
+    _, _, _, sec_mat, _ = line_arrays(sim, "mooring_line")
+    mbl = float(np.min(sim.model.mat_f[sec_mat, L.MF_MBL]))
+    if max(top, math.hypot(h, v_a)) > mbl:
+        inst = sim.model.scene.installation
+        raise NoEquilibrium("installation.mooring_line_length_m", inst.mooring_line_length_m,
+                            "a longer line or a smaller vessel_spacing_m",
+                            f"the mooring line is too short: it would carry {max(top, math.hypot(h, v_a)) / 1e6:.3g} "
+                            f"MN against its MBL of {mbl / 1e6:.3g} MN")
+    return h, v_a
+
+
+def _balance_release_point(sim, release: np.ndarray, target_z: float, hang_n: float) -> np.ndarray:
+    """Release point where the wire (holding ``hang_n`` below it) balances the mooring line, at ``target_z``;
+    sets the wire's unstretched length and places its nodes."""
+    st, m = sim.state, sim.model
+    wire = m.lines["wire"].index
+    top_a = _top(sim, "wire")
+    inst = m.scene.installation
+    if top_a[2] - target_z < MIN_WIRE_M:
+        highest = inst.drop_height_m - (target_z - top_a[2]) - MIN_WIRE_M
+        raise NoEquilibrium("installation.drop_height_m", inst.drop_height_m, f"<= {highest:.1f} m",
+                            "the anchor cannot hang that high: the release point would be above the installation "
+                            "vessel's fairlead")
+    sec_w, sec_ea, sec_len, _, arcs = line_arrays(sim, "wire")
+    h_m = v_m = 0.0
+    u = np.array([1.0, 0.0])
+    for _ in range(BALANCE_ROUNDS):
+        if "mooring_line" in m.lines:
+            h_m, v_m = _check_mooring_line(sim, release)
+            towards = _top(sim, "mooring_line")[:2] - release[:2]
+            norm = float(np.hypot(*towards))
+            if norm > 1e-9:
+                u = towards / norm
+        v_w = max(hang_n - v_m, 1e-3 * hang_n)
+        x_w, z_w, _ = walk(h_m, v_w, sec_w, sec_ea, sec_len, 0.0, float(np.sum(sec_len)))
+        new = np.array([top_a[0] + x_w * u[0], top_a[1] + x_w * u[1], top_a[2] - z_w])
+        error = new[2] - target_z
+        sec_len = sec_len * (1.0 + error / float(np.sum(sec_len)))
+        moved = float(np.linalg.norm(new[:2] - release[:2]))
+        release = np.array([new[0], new[1], target_z])
+        if moved < 1e-6 and abs(error) < 1e-6:
+            break
+    start, nseg = st.line_i[wire, L.LI_SEG_START], st.line_i[wire, L.LI_NSEG]
+    total = float(np.sum(sec_len))
+    st.seg_f[start:start + nseg, L.SF_L0] *= total / float(np.sum(st.seg_f[start:start + nseg, L.SF_L0]))
+    arcs = np.cumsum(st.seg_f[start:start + nseg, L.SF_L0])[:-1]
+    nodes = _interior_nodes(sim, "wire")
+    for node, arc in zip(nodes, arcs, strict=True):
+        x, z, _ = walk(h_m, max(hang_n - v_m, 1e-3 * hang_n), sec_w, sec_ea, sec_len, 0.0, float(arc))
+        st.node_pos[node] = (release[0] - x * u[0], release[1] - x * u[1], release[2] + z)
+    return release
+
+
+def change_line_length(state, line: int, delta_m: float) -> None:
+    """Lengthen (or shorten) a line's unstretched length by ``delta_m`` by scaling all its segments alike,
+    so that no segment leaves the stable length range however large the change (e.g. a 15 m wire stretch
+    over 10 m segments)."""
+    start, nseg = state.line_i[line, L.LI_SEG_START], state.line_i[line, L.LI_NSEG]
+    lengths = state.seg_f[start:start + nseg, L.SF_L0]
+    lengths *= 1.0 + delta_m / lengths.sum()
+
+
+def check_fibre_clearance(sim) -> None:
+    """Refuse an equilibrium in which the mooring line's fibre rope rests on the seabed (it must not touch it).
+
+    Raises
+    ------
+    NoEquilibrium
+    """
+    m = sim.model
+    if "mooring_line" not in m.lines:
+        return
+    st = sim.state
+    inst = m.scene.installation
+    fibre = m.material_names.index(inst.fibre_material) if inst.fibre_material in m.material_names else -1
+    segs = np.nonzero((st.seg_i[:, L.SI_LINE] == m.lines["mooring_line"].index) & (st.seg_i[:, L.SI_ACTIVE] == 1)
+                      & (st.seg_i[:, L.SI_MAT] == fibre))[0]
+    if segs.size == 0:
+        return
+    nodes = np.concatenate([st.seg_i[segs, L.SI_A], st.seg_i[segs, L.SI_B]])
+    lowest = float(np.min(st.node_pos[nodes, 2])) + sim.env_f[L.EF_DEPTH]
+    if lowest < 0.0:
+        raise NoEquilibrium("installation.mooring_line_length_m", inst.mooring_line_length_m,
+                            "a shorter line or a larger vessel_spacing_m",
+                            "the fibre rope would rest on the seabed")
