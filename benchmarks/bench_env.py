@@ -12,7 +12,11 @@ equilibrium is solved before timing starts (it is cached). With waves the env ru
 tight_line resolution with its ``in_waves`` keys (1 m loop chain) throughout. A second
 variant (``calm default scene``) keeps the bundled gjoa-500 scene as it is, without waves (Hs 0, no warm-up): its
 slack loop hangs and falls on the coarse resolution. A third runs the pre-release phase at the scene's own step
-(``control.pre_release_dt_s`` and ``pre_release_dt_calm_s`` null) for comparison.
+(``control.pre_release_dt_s`` and ``pre_release_dt_calm_s`` null) for comparison. The ``fresh geometry``
+variant (single env, calm water, no current) draws every episode's geometry from the config's ranges (depth,
+spacing, line length, anchor mass), so every reset solves a new equilibrium on a newly compiled model; it
+records the reset and whole-episode times (median) and where the time goes. ``--variant NAME`` runs one variant
+and merges its rows into the committed JSON (the other rows keep their numbers).
 
 Measured for each env: wall time, CPU time of every process involved (``/proc`` for worker processes),
 transitions (env steps that are not autoresets) and episodes per second, per second per core used.
@@ -54,6 +58,8 @@ SCENE = {"water_depth_m": 500.0, "vessel_spacing_over_depth": 0.1, "mooring_line
          "current_scale": 0.0, "anchor_mass_scale": 1.0}
 OVERRIDES = {f"scenario.{k}": v for k, v in SCENE.items()}  # autoresets draw from the config: fix it there
 CALM = {"scenario.sea_state_hs_m": 0.0}  # the bundled default scene as it is: no waves
+FRESH = {"scenario.sea_state_hs_m": 0.0, "scenario.current_scale": 0.0}  # geometry from the config's ranges
+FRESH_LABEL = "fresh geometry"
 RELEASE_STEP = 59  # 0-based: 59 holding steps, release on the 60th
 SINGLE_EPISODES_FACTOR = 4  # the single env's episodes are cheap and its CPU per episode is the target: more of them
 
@@ -98,6 +104,50 @@ def bench_single(episodes: int, overrides: dict) -> dict:
             "wall_s": wall, "cpu_s": cpu, "reset_wall_s_mean": resets_wall / episodes, "kernel_s": advancer.kernel_s,
             "episode_cpu_s": {"min": min(episode_cpu), "median": float(np.median(episode_cpu)),
                               "max": max(episode_cpu)}}
+
+
+def bench_fresh_geometry(episodes: int) -> dict:
+    """Single env, calm water, every episode on a new geometry drawn from the config's ranges (a new equilibrium
+    and compiled model at every reset): reset and whole-episode wall and CPU time, median and spread."""
+    env = gym.make(ENV_ID, overrides=FRESH)
+    for seed in (0, 1):  # compiles the kernels; then the timed episodes draw geometries not seen before
+        env.reset(seed=seed)
+        for k in range(RELEASE_STEP + 1):
+            env.step(_actions(np.array([k]))[0])
+    core = env.unwrapped.core
+    reset_wall, reset_cpu, episode_wall, episode_cpu, fall_wall, redraws, origins = [], [], [], [], [], 0, set()
+    solves0, solve_s0 = core.equilibria.solves, core.equilibria.solve_wall_s
+    steps = 0
+    for ep in tqdm(range(episodes), desc="fresh geometry", leave=False):
+        t, c = time.perf_counter(), time.process_time()
+        _, info = env.reset(seed=10_000 + ep)
+        reset_wall.append(time.perf_counter() - t)
+        reset_cpu.append(time.process_time() - c)
+        redraws += info["scenario_redraws"]
+        origins.add(info["statics"])
+        for k in range(RELEASE_STEP + 1):
+            tf = time.perf_counter()
+            _, _, terminated, truncated, step_info = env.step(_actions(np.array([k]))[0])
+            steps += 1
+            if terminated or truncated:
+                break
+        fall_wall.append(time.perf_counter() - tf)
+        episode_wall.append(time.perf_counter() - t)
+        episode_cpu.append(time.process_time() - c)
+        assert step_info["sim_status"] == "touchdown", step_info["sim_status"]
+    solves = core.equilibria.solves - solves0
+    env.close()
+
+    def stats(values: list[float]) -> dict[str, float]:
+        return {"min": min(values), "median": float(np.median(values)), "p90": float(np.percentile(values, 90)),
+                "max": max(values)}
+
+    return {"env": "single", "num_envs": 1, "cores": 1, "episodes": episodes, "transitions": steps,
+            "wall_s": sum(episode_wall), "cpu_s": sum(episode_cpu), "statics": sorted(origins),
+            "solves": solves, "solve_wall_s_mean": (core.equilibria.solve_wall_s - solve_s0) / max(solves, 1),
+            "scenario_redraws": redraws, "reset_wall_s": stats(reset_wall), "reset_cpu_s": stats(reset_cpu),
+            "episode_wall_s": stats(episode_wall), "episode_cpu_s": stats(episode_cpu),
+            "release_step_wall_s": stats(fall_wall)}
 
 
 def _run_vector(env, n: int, episodes_per_env: int, cpu_fn) -> dict:
@@ -198,6 +248,24 @@ def env_table(rows: list[dict]) -> str:
                   "CPU s/episode", "CPU ms/transition", "kernel share"], out)
 
 
+def fresh_table(fresh: dict) -> str:
+    """The ``fresh geometry`` run as a line and a markdown table (milliseconds)."""
+    def ms(stats: dict) -> str:
+        return f"{1e3 * stats['median']:.1f} / {1e3 * stats['p90']:.1f}"
+
+    date = fresh["date"][:19].replace("T", " ")
+    head = (f"`{COMMAND} --variant fresh-geometry`, run {date} UTC on {fresh['machine']} (1-min load average "
+            f"{fresh['load_average_1min']['before']:.1f} -> {fresh['load_average_1min']['after']:.1f}): single "
+            f"env, calm water, no current, {fresh['episodes']} episodes, each on a new geometry drawn from the "
+            f"config's ranges ({fresh['solves']} static solves, {fresh['scenario_redraws']} redraws). Times in ms, "
+            "median / 90th percentile; `release step` is the last step (remesh and fall to touchdown).")
+    row = [FRESH_LABEL, fresh["episodes"], ms(fresh["reset_wall_s"]), ms(fresh["reset_cpu_s"]),
+           f"{1e3 * fresh['solve_wall_s_mean']:.1f}", ms(fresh["episode_wall_s"]), ms(fresh["episode_cpu_s"]),
+           ms(fresh["release_step_wall_s"])]
+    return head + "\n\n" + table(["variant", "episodes", "reset", "reset CPU", "solve (mean)", "episode",
+                                  "episode CPU", "release step"], [row])
+
+
 def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
     """The docs blocks of one run: the table with the batched/async ratios (docs/env-speed.md) and the README's
     headline line."""
@@ -215,6 +283,9 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
                      f"Python and IPC (async CPU per transition over the single env's kernel CPU per transition): "
                      f"{b['async_cpu_ms_per_transition']:.3f} / {b['single_kernel_ms_per_transition']:.3f} ms = "
                      f"{b['batched_over_async_upper_bound']:.2f}x.")
+    fresh = result.get("fresh_geometry")
+    if fresh is not None:
+        lines += ["", fresh_table(fresh), ""]
     single = {r["variant"]: r for r in rows if r["env"] == "single"}
     calm, waves = single.get("calm default scene"), single.get("default config")
     ratios = result["batched_over_async_transitions"]
@@ -249,12 +320,26 @@ def main(argv: list[str] | None = None) -> dict:
                         help="only the default config (no calm scene, no pre-release at the scene's step)")
     parser.add_argument("--docs-only", action="store_true",
                         help="rewrite the docs tables from benchmarks/results/bench_env.json, run nothing")
+    parser.add_argument("--variant", choices=["fresh-geometry"],
+                        help="run only this variant and merge it into benchmarks/results/bench_env.json")
+    parser.add_argument("--fresh-episodes", type=int, default=40, help="episodes of the fresh geometry variant")
     args = parser.parse_args(argv)
     if args.docs_only:
         write_blocks(docs_from_results())
         return load_result("bench_env")
     episodes = 1 if args.quick else args.episodes
     load_before = os.getloadavg()[0]
+    if args.variant == "fresh-geometry":
+        fresh = bench_fresh_geometry(4 if args.quick else args.fresh_episodes)
+        result = load_result("bench_env")
+        result["fresh_geometry"] = {**run_record(load_before), "python": platform.python_version(),
+                                    "config": "anchor-release (default)", "overrides": FRESH, **fresh}
+        result["targets"] = {**result.get("targets", {}), "fresh_reset_wall_s_median": 0.020,
+                             "fresh_episode_wall_s_median": 0.040}
+        RESULTS.write_text(json.dumps(result, indent=2))
+        write_blocks(docs_blocks(result))
+        print(fresh_table(result["fresh_geometry"]))
+        return result
     variants = [("default config", OVERRIDES)]
     if not args.no_compare:
         variants.append(("pre-release at the scene's step", {**OVERRIDES, "control.pre_release_dt_s": None,
@@ -293,6 +378,7 @@ def main(argv: list[str] | None = None) -> dict:
         bounds[label] = {"async_cpu_ms_per_transition": pick["async"]["cpu_ms_per_transition"],
                          "single_kernel_ms_per_transition": kernel_ms,
                          "batched_over_async_upper_bound": pick["async"]["cpu_ms_per_transition"] / kernel_ms}
+    previous = load_result("bench_env") if RESULTS.is_file() else {}
     result = {
         **run_record(load_before),
         "python": platform.python_version(),
@@ -304,8 +390,10 @@ def main(argv: list[str] | None = None) -> dict:
         "batched_over_async_transitions": ratios,
         "batched_over_async_within_rounds": round_ratios(rounds, [label for label, _ in variants]),
         "batched_over_async_bound_from_kernel_cost": bounds,
-        "targets": {"episode_cpu_s": 0.050, "batched_over_async": 3.0},
+        "targets": {**previous.get("targets", {}), "episode_cpu_s": 0.050, "batched_over_async": 3.0},
     }
+    if "fresh_geometry" in previous:  # measured by --variant fresh-geometry
+        result["fresh_geometry"] = previous["fresh_geometry"]
     RESULTS.parent.mkdir(parents=True, exist_ok=True)
     RESULTS.write_text(json.dumps(result, indent=2))
     write_blocks(docs_blocks(result))

@@ -74,8 +74,8 @@ class AnchorPlanEnv(gym.Env):
 
     ## Starting State
 
-    As AnchorRelease-v0: a scenario drawn from the config (``reset(options=...)`` fixes fields), the cached
-    hanging equilibrium and, with waves, the ``control.warmup_s`` warm-up.
+    As AnchorRelease-v0: a scenario drawn from the config (``reset(options=...)`` fixes fields), its hanging
+    equilibrium solved at the reset and, with waves, the ``control.warmup_s`` warm-up.
 
     ## Episode End
 

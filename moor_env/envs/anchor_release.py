@@ -143,14 +143,15 @@ class AnchorReleaseEnv(gym.Env):
     ## Starting State
 
     ``reset`` draws a scenario from the config's ``scenario`` section with the env's seeded generator: water
-    depth (400/500/600 m), vessel spacing (0.1/0.2/0.3 x depth) and mooring-line length (1.04/1.08 x depth,
-    including 150 m of bottom chain), current scale (0/0.5/1 x the seed 003 profile 0.8/0.6/0.2 m/s at
+    depth (400-600 m), vessel spacing (0.1-0.3 x depth) and mooring-line length (1.04-1.08 x depth, including
+    150 m of bottom chain), each uniform, current scale (0/0.5/1 x the seed 003 profile 0.8/0.6/0.2 m/s at
     0/300/400 m) and direction (0/180 deg), sea state Hs (0-3 m) and Tp (7-13 s) with a drawn phase seed, chain
-    tangential drag coefficient (0.0052-0.0086) and anchor mass scale (0.98/1/1.02). ``reset(options={...})``
+    tangential drag coefficient (0.0052-0.0086) and anchor mass scale (0.98-1.02). ``reset(options={...})``
     fixes any of these fields by name (``moor_env.envs.SCENARIO_FIELDS``). The anchor starts at the hanging
-    equilibrium of that scene (wire length solved so that the tip hangs ``drop_height_m`` = 68.5 m above the
-    seabed; equilibria are cached, see ``moor_env.envs.equilibria``); with waves, ``control.warmup_s`` (20 s) of
-    simulated time, over which the waves are ramped in, passes before the first observation.
+    equilibrium of that scene, solved at the reset (wire length solved so that the tip hangs ``drop_height_m`` =
+    68.5 m above the seabed; see ``moor_env.envs.equilibria``); a drawn scenario without one is drawn again
+    (``info["scenario_redraws"]`` counts them). With waves, ``control.warmup_s`` (20 s) of simulated time, over
+    which the waves are ramped in, passes before the first observation.
 
     ## Episode End
 
@@ -189,7 +190,9 @@ class AnchorReleaseEnv(gym.Env):
     touchdown ``touchdown`` (speed_m_s, vertical_speed_m_s, tilt_deg, offset_m, fall_time_s, chain_on_seabed_m,
     chain_past_back_end_m: how far the vertical chain has fallen past the anchor's back end, positive where it has
     passed into the body, which the model has no contact to stop; README "Accuracy of the fall");
-    ``reset`` returns the ``scenario`` and where its equilibrium came from (``statics``).
+    ``reset`` returns the ``scenario``, the draws refused before it (``scenario_redraws``: scenarios without an
+    equilibrium) and where its equilibrium came from (``statics``: ``solved``, or ``memory`` for a geometry
+    drawn again).
 
     ## Version History
 

@@ -3,7 +3,7 @@
 An env config names the scene it builds on (``scene: gjoa-500``), the fidelity overrides applied to every
 episode (a mapping of scene overrides, which a fidelity preset can stand in for), the control
 limits, the scenario distribution drawn at every reset, the reward weights, the one-shot plan settings, the
-equilibrium cache and rendering. Every value is SI with the unit in the key name (``_m``, ``_s``, ``_m_s``,
+equilibria kept in memory and rendering. Every value is SI with the unit in the key name (``_m``, ``_s``, ``_m_s``,
 ``_n``, ``_deg``); ``_over_depth`` values are fractions of the water depth.
 
 Validation is pydantic (as :mod:`moor_env.config`); an invalid value raises
@@ -41,6 +41,10 @@ SCENARIO_RANGES: dict[str, tuple[float, float]] = {
     "chain_cd_tangential": (0.0, 5.0),
     "anchor_mass_scale": (0.5, 1.5),
 }
+# The fields that shape the hanging geometry (ranges or constants in the bundled configs); a drawn scenario
+# without an equilibrium is drawn again.
+GEOMETRY_FIELDS: tuple[str, ...] = ("water_depth_m", "vessel_spacing_over_depth", "mooring_line_length_over_depth",
+                                    "vertical_chain_length_m", "drop_height_m")
 SEED_FIELD = "sea_state_seed"
 SEED_HIGH = 2**31 - 1
 SCENARIO_FIELDS: tuple[str, ...] = (*SCENARIO_RANGES, SEED_FIELD)
@@ -80,16 +84,17 @@ def _values(dist: Distribution) -> tuple[float, ...]:
 
 
 class ScenarioConfig(_Strict):
-    """Distribution of the scenario drawn at each reset (a number is a constant; ``{choice: [...]}``;
-    ``{uniform: [low, high]}``). ``sea_state_seed: draw`` draws the wave phases' seed from the env's generator.
+    """Distribution of the scenario drawn at each reset (a number is a constant; ``{uniform: [low, high]}``;
+    ``{choice: [...]}``). ``sea_state_seed: draw`` draws the wave phases' seed from the env's generator.
 
-    Fields that change the hanging equilibrium (all but the sea state and ``chain_cd_tangential``) should be
-    discrete so that the equilibrium cache hits; see :mod:`moor_env.envs.equilibria`.
+    The geometry (:data:`GEOMETRY_FIELDS`) is drawn from continuous ranges: every reset solves its own hanging
+    equilibrium (:mod:`moor_env.envs.equilibria`), and a drawn geometry without one is drawn again
+    (:func:`moor_env.envs.scenario.start_episode`).
     """
 
-    water_depth_m: Distribution = Choice(choice=(400.0, 500.0, 600.0))
-    vessel_spacing_over_depth: Distribution = Choice(choice=(0.1, 0.2, 0.3))
-    mooring_line_length_over_depth: Distribution = Choice(choice=(1.04, 1.08))
+    water_depth_m: Distribution = Uniform(uniform=(400.0, 600.0))
+    vessel_spacing_over_depth: Distribution = Uniform(uniform=(0.1, 0.3))
+    mooring_line_length_over_depth: Distribution = Uniform(uniform=(1.04, 1.08))
     vertical_chain_length_m: Distribution = 50.0
     drop_height_m: Distribution = 68.5
     current_scale: Distribution = Choice(choice=(0.0, 0.5, 1.0))
@@ -98,7 +103,7 @@ class ScenarioConfig(_Strict):
     sea_state_tp_s: Distribution = Uniform(uniform=(7.0, 13.0))
     sea_state_seed: Literal["draw"] | int = "draw"
     chain_cd_tangential: Distribution = Uniform(uniform=(0.0052, 0.0086))
-    anchor_mass_scale: Distribution = Choice(choice=(0.98, 1.0, 1.02))
+    anchor_mass_scale: Distribution = Uniform(uniform=(0.98, 1.02))
 
     @model_validator(mode="after")
     def _ranges(self) -> ScenarioConfig:
@@ -111,10 +116,6 @@ class ScenarioConfig(_Strict):
         if isinstance(self.sea_state_seed, int) and not 0 <= self.sea_state_seed <= SEED_HIGH:
             raise _KeyedError("scenario.sea_state_seed", self.sea_state_seed, f"'draw' or 0 .. {SEED_HIGH}")
         return self
-
-    def is_discrete(self, name: str) -> bool:
-        """Whether a field takes finitely many values (constant or choice)."""
-        return not isinstance(getattr(self, name), Uniform)
 
 
 class ControlConfig(_Strict):
@@ -203,12 +204,12 @@ class PlanConfig(_Strict):
                                          description="release delay range in calm water (no wave phase) [s]")
 
 
-class StaticsCacheConfig(_Strict):
-    """Cache of hanging equilibria (see :mod:`moor_env.envs.equilibria`)."""
+class StaticsConfig(_Strict):
+    """Hanging equilibria, solved at every reset (see :mod:`moor_env.envs.equilibria`)."""
 
-    memory_entries: int = Field(256, ge=0, le=100000)
-    disk: bool = Field(True, description="also keep equilibria in ~/.cache/moor_env/equilibria (or dir)")
-    dir: str | None = Field(None, description="cache folder; default $XDG_CACHE_HOME or ~/.cache /moor_env/equilibria")
+    memory_entries: int = Field(64, ge=0, le=100000,
+                                description="equilibria (with their compiled models) kept in memory for a geometry "
+                                            "drawn again; 0 keeps none")
 
 
 class RenderConfig(_Strict):
@@ -232,7 +233,7 @@ class EnvConfig(_Strict):
     scenario: ScenarioConfig = ScenarioConfig()
     reward: RewardConfig = RewardConfig()
     plan: PlanConfig = PlanConfig()
-    statics: StaticsCacheConfig = StaticsCacheConfig()
+    statics: StaticsConfig = StaticsConfig()
     render: RenderConfig = RenderConfig()
 
 

@@ -1,4 +1,4 @@
-"""One episode slot: a simulator started from a cached equilibrium and the RL bookkeeping around it.
+"""One episode slot: a simulator started from its scenario's hanging equilibrium and the RL bookkeeping around it.
 
 The physics stays in :mod:`moor_env.physics` / :class:`moor_env.Simulator`; a slot only drives a simulator through
 its public methods, with the pieces of the RL problem kept apart: the scenario (:mod:`~moor_env.envs.scenario`),
@@ -23,7 +23,7 @@ import numpy as np
 from moor_env.envs import actuators, measures
 from moor_env.envs.batch import BatchAdvancer, SlotBuffers
 from moor_env.envs.config import EnvConfig
-from moor_env.envs.equilibria import EquilibriumCache, scene_key
+from moor_env.envs.equilibria import Equilibria
 from moor_env.envs.observation import OBS_NAMES, normalise_observations, raw_observation
 from moor_env.envs.resolution import has_resolution, line_speed_m_s, pre_release_step_s, remesh_for_fall
 from moor_env.envs.reward import (
@@ -36,7 +36,7 @@ from moor_env.envs.reward import (
     step_outcome,
 )
 from moor_env.envs.scene import SceneFactory
-from moor_env.errors import SimulationDiverged, StaticsNotConverged
+from moor_env.errors import SimulationDiverged
 from moor_env.physics import layout as L
 from moor_env.simulation import Simulator
 
@@ -64,22 +64,23 @@ def _even_step(span_s: float, max_step_s: float) -> float:
 
 
 class InstallationCore:
-    """One episode slot: a simulator started from a cached equilibrium and the RL bookkeeping around it.
+    """One episode slot: a simulator started from its scenario's hanging equilibrium and the RL bookkeeping
+    around it.
 
     Parameters
     ----------
     cfg : EnvConfig
-    cache : EquilibriumCache, optional
+    equilibria : Equilibria, optional
         Shared between the slots of a vector env.
     factory : SceneFactory, optional
         Shared between the slots of a vector env (with its compiled models).
     """
 
-    def __init__(self, cfg: EnvConfig, cache: EquilibriumCache | None = None,
+    def __init__(self, cfg: EnvConfig, equilibria: Equilibria | None = None,
                  factory: SceneFactory | None = None) -> None:
         self.cfg = cfg
         self.factory = factory or SceneFactory(cfg)
-        self.cache = cache or EquilibriumCache(cfg.statics)
+        self.equilibria = equilibria or Equilibria(cfg.statics)
         self.sim: Simulator | None = None
         self.max_steps = max(1, int(math.ceil(cfg.control.max_pre_release_s / cfg.control.interval_s - 1e-9)))
         self.scenario: dict[str, Any] = {}
@@ -89,6 +90,7 @@ class InstallationCore:
         self.buffers: SlotBuffers | None = None  # the kernel's measures and state backup for this slot
         self.fallbacks = 0
         self.advancer = None  # the BatchAdvancer of run_advance, made on first use
+        self.redraws = 0  # scenarios drawn again at the last reset (set by scenario.start_episode)
 
     # --- episode start -----------------------------------------------------------------------------------------
     def start(self, scenario: dict[str, Any]) -> Advance | None:
@@ -97,16 +99,15 @@ class InstallationCore:
         Raises
         ------
         ConfigError, StaticsNotConverged
-            If the scenario gives no valid scene or no equilibrium.
+            If the scenario gives no valid scene or no equilibrium (:class:`~moor_env.errors.NoEquilibrium`, a
+            ConfigError).
         """
         cfg = self.cfg
-        scene, statics_data, statics, text = self.factory.episode_scene(scenario)
-        self.statics_key = scene_key(statics_data, self.cache.source_hash, text)
-        model = self.factory.model(self.statics_key, statics, scene)
+        scene, _, statics, key = self.factory.episode_scene(scenario)
+        model, statics_model = self.factory.model(key, statics, scene)
+        state, origin = self.equilibria.state(key, statics_model)
+        self.statics_key = key
         self.statics_scene = statics
-        state, origin = self.cache.state(statics_data, text)
-        if state.node_pos.shape != model.node_pos0.shape or state.seg_i.shape != model.seg_i.shape:
-            raise StaticsNotConverged("cached equilibrium does not match the compiled scene's topology")
         sim = Simulator(model)
         sim.state = state
         self.sim = sim
@@ -169,8 +170,8 @@ class InstallationCore:
         self.pending = None
         sim.state.line_f[:, L.LF_MAX_TENSION] = 0.0  # tension maxima count from the first observation
         raw = self.raw_observation() if error is None else None
-        info = {"scenario": dict(self.scenario), "sim_status": self.status, "statics": self.statics_origin,
-                "t_s": 0.0}
+        info = {"scenario": dict(self.scenario), "scenario_redraws": self.redraws, "sim_status": self.status,
+                "statics": self.statics_origin, "t_s": 0.0}
         return raw, info
 
     # --- integration steps ---------------------------------------------------------------------------------------

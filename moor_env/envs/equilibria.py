@@ -1,63 +1,41 @@
-"""Cache of hanging equilibria (the start state of every episode).
+"""Hanging equilibria: the start state of every episode, solved at every reset.
 
-The static solve (:func:`moor_env.solve_statics`) takes 0.1-5 s on the env's fidelity (more with current), far
-longer than a control step, so equilibria are cached in memory and on disk, keyed on everything in the scene
-that can change the static solution:
+Every reset solves the equilibrium of its scenario's statics scene with :func:`moor_env.solve_statics`, from
+the scene's compiled model (:meth:`~moor_env.envs.scene.SceneFactory.compiled`, which the episode's model is
+derived from). On the default config in calm water, without current, a reset on a new geometry costs a median
+6.6 ms, of which the solve is 2.5 ms on average and the compile most of the rest (``benchmarks/bench_env.py
+--variant fresh-geometry``, 40 episodes on a 2-core machine; the whole episode 51 ms, 35 ms of it the fall). A
+geometry without an equilibrium is refused at once (:class:`~moor_env.errors.NoEquilibrium`) and the reset draws
+again (:func:`~moor_env.envs.scenario.start_episode`).
 
-* the scene with its **sea state** reset to calm and seed 0, the pre-release **rates and release time** set
-  to 0 (none of them enters the static problem: waves are ramped in from zero amplitude after the solve),
-* and the chain's **tangential drag coefficient** set to the bundled scene's value. Under current it acts on the
-  small axial component of the current along the loop; measured on gjoa-500 with the seed 003 current, Cd_t
-  0.0069 and 0.0100 put the release node at the same position to 0.1 mm. Randomising it per episode therefore
-  does not need a new solve (a documented approximation: the start state is the equilibrium for the
-  nominal Cd_t).
+Kept: an in-memory LRU of the last ``statics.memory_entries`` (64) equilibria, shared by the envs of a process,
+with their compiled models in the scene factory. A geometry drawn again (an evaluation set, a fixed
+``reset(options=...)``) then resets in a median 0.7 ms of CPU instead of 9.5 ms; a new geometry costs the same
+with and without it (9.8 against 10.0 ms; 20 resets each, 3 rounds, in a busier minute than the run above), and
+64 geometries hold about 10 MB.
+Nothing is kept on disk: continuous draws never repeat a geometry, and a repeat in another process costs one
+10 ms reset.
 
-The key also holds a hash of the physics sources (``moor_env/physics/*.py``, ``compile.py``,
-``simulation.py``, ``config.py``) and of ``configs/fidelity.yaml`` (the scene names a preset, whose resolution
-decides the topology), so an edited solver or preset never returns stale states. The state stored is the
-solver's output bit for bit, so a cached and a fresh start give identical episodes.
-
-``python -m moor_env.envs.precompute --config anchor-release --jobs 2`` solves every combination of a config's
-discrete scenario fields (:func:`discrete_grid`) ahead of training.
+The statics scene is the episode's scene with its **sea state** reset to calm and seed 0, the pre-release
+**rates and release time** set to 0 (none of them enters the static problem: waves are ramped in from zero
+amplitude after the solve), and the chain's **tangential drag coefficient** set to the bundled scene's value.
+Under current Cd_t acts on the small axial component of the current along the loop; measured on gjoa-500 with
+the seed 003 current, Cd_t 0.0069 and 0.0100 put the release node at the same position to 0.1 mm, so the
+equilibrium is solved for the nominal Cd_t (a documented approximation) and episodes that differ only in the sea
+state or Cd_t share one solve and one compile. The solver is deterministic, so a kept and a fresh start give
+identical episodes.
 """
 
 from __future__ import annotations
 
 import hashlib
-import io
-import itertools
 import json
-import os
-import tempfile
-import time
 from collections import OrderedDict
-from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from moor_env.config import FIDELITY_PATH, scene_from_dict
-from moor_env.envs.config import SCENARIO_RANGES, EnvConfig, StaticsCacheConfig, _values
-from moor_env.errors import StaticsNotConverged
+from moor_env.compile import Model
+from moor_env.envs.config import StaticsConfig
 from moor_env.simulation import SimState, solve_statics
-
-# Scenario fields that do not change the static solution (see the module docstring).
-DYNAMIC_ONLY_FIELDS = ("sea_state_hs_m", "sea_state_tp_s", "sea_state_seed", "chain_cd_tangential")
-
-_ARRAYS = ("node_pos", "node_vel", "body_state", "node_i", "node_f", "seg_i", "seg_f", "line_i", "line_f")
-_PACKAGE = Path(__file__).resolve().parent.parent
-
-
-def physics_source_hash() -> str:
-    """Hash of every source file that can change a static solution."""
-    digest = hashlib.sha256()
-    files = sorted((_PACKAGE / "physics").glob("*.py")) + [_PACKAGE / n for n in ("compile.py", "simulation.py",
-                                                                                  "config.py")]
-    files.append(FIDELITY_PATH)  # a scene names its preset; the resolution it stands for is in this file
-    for path in files:
-        digest.update(path.name.encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()[:16]
 
 
 def plain_copy(data: Any) -> Any:
@@ -99,159 +77,58 @@ def scene_text(data: dict[str, Any]) -> str:
     return json.dumps(data, sort_keys=True, default=str)
 
 
-def scene_key(data: dict[str, Any], source_hash: str, text: str | None = None) -> str:
-    """Cache key of a statics scene mapping (``text``: its :func:`scene_text`, where already made)."""
+def scene_key(data: dict[str, Any], text: str | None = None) -> str:
+    """Key of a statics scene mapping (``text``: its :func:`scene_text`, where already made): the compiled
+    models and the equilibria are kept under it."""
     if text is None:
         text = scene_text(data)
-    return hashlib.sha256((source_hash + text).encode()).hexdigest()[:32]
-
-
-def default_cache_dir() -> Path:
-    """``$XDG_CACHE_HOME/moor_env/equilibria`` (``~/.cache`` when unset)."""
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "moor_env" / "equilibria"
+    return hashlib.sha256(text.encode()).hexdigest()[:32]
 
 
 _SHARED_MEMORY: OrderedDict[str, SimState] = OrderedDict()  # one LRU per process, shared by every env
-# Statics that did not converge, by key: a failed solve costs as much as tens of successful ones, and a training
-# run draws the same geometry again and again; the solver's message is kept to raise again at once.
-_SHARED_FAILURES: dict[str, str] = {}
 
 
-class EquilibriumCache:
-    """Hanging equilibria by statics-scene key: an LRU in memory (shared by all envs of a process), optionally
-    ``.npz`` files on disk.
+class Equilibria:
+    """Hanging equilibria by statics-scene key: solved with :func:`~moor_env.solve_statics` from the compiled
+    statics model, the last ``config.memory_entries`` of them kept in an LRU shared by all envs of a process.
 
     Parameters
     ----------
-    config : StaticsCacheConfig
+    config : StaticsConfig
     """
 
-    def __init__(self, config: StaticsCacheConfig) -> None:
+    def __init__(self, config: StaticsConfig) -> None:
         self.config = config
-        self.source_hash = physics_source_hash()
         self.memory = _SHARED_MEMORY
-        self.dir: Path | None = None
-        if config.disk:
-            self.dir = (Path(config.dir) if config.dir else default_cache_dir()) / self.source_hash
         self.hits = 0
-        self.disk_hits = 0
         self.solves = 0
         self.solve_wall_s = 0.0
 
-    def state(self, statics_data: dict[str, Any], text: str | None = None) -> tuple[SimState, str]:
-        """Equilibrium state (a private copy) of a statics scene mapping (``text``: its :func:`scene_text`, where
-        already made), and where it came from.
+    def state(self, key: str, model: Model) -> tuple[SimState, str]:
+        """Equilibrium state of the compiled statics model ``model`` (kept under ``key``, its
+        :func:`scene_key`), the caller's own to change, and where it came from (``"memory"`` or ``"solved"``).
 
         Raises
         ------
-        ConfigError, StaticsNotConverged
-            From the scene validation or the solver.
+        NoEquilibrium, ConfigError, StaticsNotConverged
+            From the solver.
         """
-        key = scene_key(statics_data, self.source_hash, text)
-        if self.config.memory_entries > 0 and key in self.memory:
+        keep = self.config.memory_entries > 0
+        if keep and key in self.memory:
             self.memory.move_to_end(key)
             self.hits += 1
             return self.memory[key].copy(), "memory"
-        failure = _SHARED_FAILURES.get(key) or self._load_failure(key)
-        if failure is not None:
-            _SHARED_FAILURES[key] = failure
-            raise StaticsNotConverged(f"{failure} (cached failure of this geometry)")
-        state = self._load(key)
-        origin = "disk"
-        if state is None:
-            t0 = time.perf_counter()
-            scene = scene_from_dict(json.loads(json.dumps(statics_data)))
-            try:
-                state = solve_statics(scene).simulator.state.copy()
-            except StaticsNotConverged as exc:
-                self.solve_wall_s += time.perf_counter() - t0
-                _SHARED_FAILURES[key] = str(exc)
-                self._write_atomic(self._failure_path(key), str(exc).encode())
-                raise
-            self.solve_wall_s += time.perf_counter() - t0
-            self.solves += 1
-            origin = "solved"
-            self._save(key, state)
-        else:
-            self.disk_hits += 1
-        if self.config.memory_entries > 0:
-            self.memory[key] = state
-            while len(self.memory) > self.config.memory_entries:
-                self.memory.popitem(last=False)
-        return state.copy(), origin
-
-    def _path(self, key: str) -> Path | None:
-        return None if self.dir is None else self.dir / f"{key}.npz"
-
-    def _load(self, key: str) -> SimState | None:
-        path = self._path(key)
-        if path is None or not path.is_file():
-            return None
-        try:
-            with np.load(path) as data:
-                arrays = {name: data[name].copy() for name in _ARRAYS}
-                return SimState(**arrays, t=float(data["t"]), released=bool(data["released"]))
-        except (OSError, KeyError, ValueError):
-            return None  # a damaged or foreign file: solve again (and overwrite it)
-
-    def _failure_path(self, key: str) -> Path | None:
-        return None if self.dir is None else self.dir / f"{key}.failed"
-
-    def _load_failure(self, key: str) -> str | None:
-        path = self._failure_path(key)
-        try:
-            return path.read_text() if path is not None and path.is_file() else None
-        except OSError:
-            return None
-
-    def _save(self, key: str, state: SimState) -> None:
-        buffer = io.BytesIO()
-        np.savez(buffer, **{name: getattr(state, name) for name in _ARRAYS}, t=state.t, released=state.released)
-        self._write_atomic(self._path(key), buffer.getvalue())
-
-    @staticmethod
-    def _write_atomic(path: Path | None, payload: bytes) -> None:
-        if path is None:
-            return
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-            with os.fdopen(fd, "wb") as fh:
-                fh.write(payload)
-            os.replace(tmp, path)  # atomic: concurrent workers never read a half-written file
-        except OSError:
-            pass  # a read-only home: the memory cache still works
+        result = solve_statics(model, progress=False)
+        self.solve_wall_s += result.wall_static_s
+        self.solves += 1
+        state = result.simulator.state
+        if not keep:
+            return state, "solved"
+        self.memory[key] = state
+        while len(self.memory) > self.config.memory_entries:
+            self.memory.popitem(last=False)
+        return state.copy(), "solved"
 
     def stats(self) -> dict[str, float]:
-        """Counters: memory hits, disk hits, solves and their wall time [s]."""
-        return {"memory_hits": self.hits, "disk_hits": self.disk_hits, "solves": self.solves,
-                "solve_wall_s": self.solve_wall_s}
-
-
-# --- precomputation ------------------------------------------------------------------------------------------
-def discrete_grid(cfg: EnvConfig) -> list[dict[str, float]]:
-    """Every combination of the statics-relevant scenario fields of a config.
-
-    Raises
-    ------
-    ValueError
-        If a statics-relevant field is continuous (uniform): it has no finite grid.
-    """
-    names = [n for n in SCENARIO_RANGES if n not in DYNAMIC_ONLY_FIELDS]
-    values = []
-    for name in names:
-        if not cfg.scenario.is_discrete(name):
-            raise ValueError(f"scenario.{name} is continuous: every reset solves its own equilibrium")
-        values.append(_values(getattr(cfg.scenario, name)))
-    grid = [dict(zip(names, combo, strict=True)) for combo in itertools.product(*values)]
-    # the current direction does not matter without current: keep one direction there
-    seen, unique = set(), []
-    for row in grid:
-        if row["current_scale"] == 0.0:
-            row = {**row, "current_direction_deg": 0.0}
-        k = tuple(sorted(row.items()))
-        if k not in seen:
-            seen.add(k)
-            unique.append(row)
-    return unique
+        """Counters: memory hits, solves and the solves' wall time [s]."""
+        return {"memory_hits": self.hits, "solves": self.solves, "solve_wall_s": self.solve_wall_s}

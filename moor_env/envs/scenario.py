@@ -2,7 +2,9 @@
 
 A scenario is a mapping of every field of :data:`~moor_env.envs.config.SCENARIO_FIELDS` to a value (depth,
 spacing, line length, current, sea state and its seed, chain drag, anchor mass scale). The config's ``scenario``
-section gives each field a constant, a choice or a uniform range; ``reset(options=...)`` fixes fields by name.
+section gives each field a constant, a uniform range or a choice; the bundled configs draw the geometry from
+ranges, every draw a new geometry whose equilibrium the reset solves. ``reset(options=...)`` fixes fields by
+name.
 """
 
 from __future__ import annotations
@@ -11,7 +13,17 @@ from typing import Any
 
 import numpy as np
 
-from moor_env.envs.config import SCENARIO_FIELDS, SCENARIO_RANGES, SEED_FIELD, SEED_HIGH, Choice, EnvConfig, Uniform
+from moor_env.envs.config import (
+    GEOMETRY_FIELDS,
+    SCENARIO_FIELDS,
+    SCENARIO_RANGES,
+    SEED_FIELD,
+    SEED_HIGH,
+    Choice,
+    EnvConfig,
+    Uniform,
+    _values,
+)
 from moor_env.errors import ConfigError, StaticsNotConverged
 
 MAX_SCENARIO_DRAWS = 10
@@ -83,14 +95,29 @@ def start_episode(core, rng: np.random.Generator, options: dict[str, Any] | None
     """Draw a scenario (``options`` fix fields) and start the episode slot ``core``
     (:class:`~moor_env.envs.core.InstallationCore`) on it; the warm-up advance to integrate, if any.
 
-    A drawn scenario without a valid scene or equilibrium is drawn again (up to ``MAX_SCENARIO_DRAWS`` times);
-    with ``options`` given the error is raised at once.
+    A drawn scenario whose scene is invalid or has no equilibrium (:class:`~moor_env.errors.ConfigError`, e.g.
+    :class:`~moor_env.errors.NoEquilibrium`, or :class:`~moor_env.errors.StaticsNotConverged`) is drawn again,
+    up to ``MAX_SCENARIO_DRAWS`` draws in all; ``core.redraws`` counts the draws refused (the reset info's
+    ``scenario_redraws``). With ``options`` given the error is raised at once.
+
+    Raises
+    ------
+    ConfigError
+        Naming the config's scenario keys when no draw gave an equilibrium, with the last refusal as the reason;
+        the solver's or scene's own error when ``options`` are given.
     """
+    refusals: list[str] = []
     for attempt in range(MAX_SCENARIO_DRAWS):
         scenario = draw_scenario(core.cfg, rng, options)
         try:
+            core.redraws = attempt
             return core.start(scenario)
-        except (ConfigError, StaticsNotConverged):
-            if options or attempt == MAX_SCENARIO_DRAWS - 1:
+        except (ConfigError, StaticsNotConverged) as exc:
+            if options:
                 raise
-    raise AssertionError("unreachable")  # pragma: no cover
+            refusals.append(str(exc))
+    drawn = {name: getattr(core.cfg.scenario, name) for name in GEOMETRY_FIELDS}
+    drawn = {name: list(_values(dist)) for name, dist in drawn.items() if isinstance(dist, (Choice, Uniform))}
+    raise ConfigError(", ".join(f"scenario.{name}" for name in drawn) or "scenario", drawn,
+                      "ranges in which the scene has a static equilibrium",
+                      f"{MAX_SCENARIO_DRAWS} draws in a row refused; the last: {refusals[-1]}")

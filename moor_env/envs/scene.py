@@ -3,8 +3,11 @@
 :class:`SceneFactory` reads the config's base scene once, applies the fidelity preset and the config's scene
 overrides, and turns each scenario into a scene mapping, its validated :class:`~moor_env.config.SceneConfig`,
 the statics mapping whose equilibrium starts the episode (:mod:`moor_env.envs.equilibria`) and the compiled
-model (cached: a new sea state or chain drag costs no compile, :func:`derive_model`). The mesh a scenario starts
-on and the one its fall needs come from the preset's :class:`~moor_env.envs.resolution.TightLineRule`.
+model (one compile per geometry: a new sea state or chain drag costs none, :func:`derive_model`). A new
+geometry's statics scene is validated section by section against a template of the same resolution
+(:meth:`SceneFactory.statics_scene`): a full validation re-reads the fidelity presets and costs more than the
+static solve. The mesh a scenario starts on and the one its fall needs come from the preset's
+:class:`~moor_env.envs.resolution.TightLineRule`.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from pydantic import ValidationError
 from moor_env.compile import Model, compile_scene
 from moor_env.config import (
     SET_SHORTCUTS,
+    AnchorConfig,
     DiscretizationConfig,
     EnvironmentConfig,
     InstallationConfig,
@@ -65,9 +69,21 @@ def derive_model(base: Model, scene) -> Model:
     return dataclasses.replace(base, scene=scene, mat_f=mat_f)
 
 
+_GEOMETRY_SECTIONS = ("environment", "installation", "anchor")  # the sections a scenario's geometry sets
+
+
+def _keep(entries: OrderedDict, key: str, value: Any, size: int) -> None:
+    """Put ``value`` under ``key`` as the newest entry of the LRU ``entries``, which keeps ``size``."""
+    entries[key] = value
+    entries.move_to_end(key)
+    while len(entries) > size:
+        entries.popitem(last=False)
+
+
 class SceneFactory:
     """Scenario -> scene mapping -> validated :class:`SceneConfig` -> compiled model (the base scene is read from
-    YAML once; validated statics scenes and compiled models are cached, shared by the slots of a vector env).
+    YAML once; the statics scenes and compiled models of the last ``statics.memory_entries`` geometries are kept,
+    shared by the slots of a vector env, with the equilibria of :mod:`moor_env.envs.equilibria`).
 
     Raises
     ------
@@ -76,13 +92,15 @@ class SceneFactory:
         config's representative scenario: the first value of every scenario distribution).
     """
 
-    STATICS_SCENE_ENTRIES = 256
-    MODEL_CACHE_ENTRIES = 1024  # pre-release and fall models of the 270 cached equilibria of the default grid
+    TEMPLATE_ENTRIES = 8  # statics scenes by everything but the geometry: one per pre-release resolution
 
     def __init__(self, cfg: EnvConfig) -> None:
         self.cfg = cfg
-        self.models: OrderedDict[str, Model] = OrderedDict()  # compiled statics scenes by equilibrium key
-        self.statics_scenes: OrderedDict[str, SceneConfig] = OrderedDict()  # validated, by statics mapping
+        # the last geometries' statics scenes and compiled models (pre-release and fall) by equilibrium key
+        self.statics_entries = cfg.statics.memory_entries
+        self.models: OrderedDict[str, Model] = OrderedDict()
+        self.statics_scenes: OrderedDict[str, SceneConfig] = OrderedDict()
+        self.templates: OrderedDict[str, SceneConfig] = OrderedDict()
         raw = scene_dict(cfg.scene)
         if raw.get("kind", "dart_installation") != "dart_installation" or "installation" not in raw:
             raise ConfigError("scene", cfg.scene, "a dart_installation scene")
@@ -150,13 +168,12 @@ class SceneFactory:
 
     # --- validated scenes ------------------------------------------------------------------------------------------
     def episode_scene(self, scenario: dict[str, Any]) -> tuple[SceneConfig, dict[str, Any], SceneConfig, str]:
-        """The scenario's validated scene, its statics mapping, that mapping's validated scene and its
-        :func:`~moor_env.envs.equilibria.scene_text` (the cache keys' text).
+        """The scenario's validated scene, its statics mapping, that mapping's validated scene
+        (:meth:`statics_scene`) and its :func:`~moor_env.envs.equilibria.scene_key` (the equilibrium key).
 
-        The statics scene is validated once per equilibrium (cached); the episode scene is it with the
-        scenario's ``environment``, ``installation``, chain material and fall integrator validated on their own,
-        which is what :meth:`scene` gives at a fraction of the cost (a full validation re-reads the fidelity
-        presets; tested equal). Any validation error is reported by :meth:`scene`.
+        The episode scene is the statics scene with the scenario's ``environment``, ``installation``, chain
+        material and fall integrator validated on their own, which is what :meth:`scene` gives at a fraction of
+        the cost (tested equal). Any validation error is reported by :meth:`scene`.
 
         Raises
         ------
@@ -166,11 +183,11 @@ class SceneFactory:
         data = self.scene_data(scenario)
         statics_data = self.statics_data(scenario, data)
         text = scene_text(statics_data)
-        key = scene_key(statics_data, "", text)
+        key = scene_key(statics_data, text)
         statics = self.statics_scenes.get(key)
         try:
             if statics is None:
-                statics = scene_from_dict(statics_data)
+                statics = self.statics_scene(statics_data)
             chain = self.chain_material
             update = {
                 "environment": EnvironmentConfig.model_validate(data["environment"]),
@@ -184,12 +201,37 @@ class SceneFactory:
             scene = statics.model_copy(update=update)
             check_scene_consistency(scene)
         except (ConfigError, ValidationError):
-            return self.scene(scenario), statics_data, statics, text  # raises the keyed error
-        self.statics_scenes[key] = statics
-        self.statics_scenes.move_to_end(key)
-        while len(self.statics_scenes) > self.STATICS_SCENE_ENTRIES:
-            self.statics_scenes.popitem(last=False)
-        return scene, statics_data, statics, text
+            return self.scene(scenario), statics_data, statics, key  # raises the keyed error
+        _keep(self.statics_scenes, key, statics, self.statics_entries)
+        return scene, statics_data, statics, key
+
+    def statics_scene(self, statics_data: dict[str, Any]) -> SceneConfig:
+        """Validated scene of a statics mapping (:meth:`statics_data`).
+
+        Mappings that differ only in the geometry's sections (``environment``, ``installation``, ``anchor``)
+        share a template: the first of them is validated in full (:func:`scene_from_dict`, with the fidelity
+        preset applied); the others are the template with those sections validated on their own and the scene's
+        consistency checked (tested equal to a full validation). The envs never fit the resolution to the
+        geometry in the scene (``discretization.fit_to_geometry`` false), so the preset fills the same keys for all.
+
+        Raises
+        ------
+        ConfigError, ValidationError
+        """
+        rest = scene_text({k: v for k, v in statics_data.items() if k not in _GEOMETRY_SECTIONS})
+        template = self.templates.get(rest)
+        if template is None or template.discretization.fit_to_geometry:
+            scene = scene_from_dict(statics_data)
+            _keep(self.templates, rest, scene, self.TEMPLATE_ENTRIES)
+            return scene
+        self.templates.move_to_end(rest)
+        scene = template.model_copy(update={
+            "environment": EnvironmentConfig.model_validate(statics_data["environment"]),
+            "installation": InstallationConfig.model_validate(statics_data["installation"]),
+            "anchor": AnchorConfig.model_validate(statics_data["anchor"]),
+        })
+        check_scene_consistency(scene)
+        return scene
 
     def scene(self, scenario: dict[str, Any]):
         """Validated scene of a scenario.
@@ -207,22 +249,22 @@ class SceneFactory:
 
     # --- compiled models -------------------------------------------------------------------------------------------
     def compiled(self, key: str, scene: SceneConfig) -> Model:
-        """``compile_scene(scene)`` cached under ``key``."""
+        """``compile_scene(scene)``, kept under ``key`` for the last geometries (pre-release and fall model of
+        each of ``statics.memory_entries``)."""
         base = self.models.get(key)
         if base is None:
             base = compile_scene(scene)
-            self.models[key] = base
-            while len(self.models) > self.MODEL_CACHE_ENTRIES:
-                self.models.popitem(last=False)
+            _keep(self.models, key, base, 2 * self.statics_entries)
         else:
             self.models.move_to_end(key)
         return base
 
-    def model(self, statics_key: str, statics: SceneConfig, scene: SceneConfig) -> Model:
-        """Compiled model of ``scene``: the model of its statics scene ``statics`` (cached under the equilibrium
-        key ``statics_key``) with the episode's sea state and chain Cd_t (:func:`derive_model`), so that a new sea
-        state costs no compile."""
-        return derive_model(self.compiled(statics_key, statics), scene)
+    def model(self, statics_key: str, statics: SceneConfig, scene: SceneConfig) -> tuple[Model, Model]:
+        """Compiled model of ``scene`` and that of its statics scene ``statics`` (kept under the equilibrium key
+        ``statics_key``): the first is the second with the episode's sea state and chain Cd_t
+        (:func:`derive_model`), so that a new sea state costs no compile."""
+        base = self.compiled(statics_key, statics)
+        return derive_model(base, scene), base
 
     def fall_model(self, statics_key: str, statics: SceneConfig, episode: SceneConfig, keys: dict[str, Any]) -> Model:
         """The model of the episode scene ``episode`` (statics scene ``statics``, equilibrium key ``statics_key``)

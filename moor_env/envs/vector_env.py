@@ -4,8 +4,8 @@
 :class:`~moor_env.envs.core.InstallationCore` (the single env's RL logic), advanced together by the GIL-free
 batch kernel (:mod:`moor_env.envs.batch`: one numba call per group of scenes, the groups on ``num_threads``
 threads). Row i equals ``AnchorReleaseEnv`` reset with seed ``seed + i`` and given the same actions, bit for
-bit (tested), including next-step autoreset as Gymnasium's ``SyncVectorEnv`` does it. Equilibria are shared
-between the slots (one cache).
+bit (tested), including next-step autoreset as Gymnasium's ``SyncVectorEnv`` does it. The slots share one
+scene factory and the equilibria it keeps in memory.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from moor_env.envs.anchor_release import step_limit
 from moor_env.envs.batch import BatchAdvancer
 from moor_env.envs.config import EnvConfig, load_env_config
 from moor_env.envs.core import InstallationCore
-from moor_env.envs.equilibria import EquilibriumCache
+from moor_env.envs.equilibria import Equilibria
 from moor_env.envs.observation import OBS_CLIP, OBS_NAMES, normalise_observations
 from moor_env.envs.render import FrameRenderer, snapshot
 from moor_env.envs.scenario import start_episode
@@ -78,8 +78,8 @@ class AnchorReleaseVectorEnv(VectorEnv):
         init_vector_env(self, num_envs, config, overrides, render_mode)
         self.num_threads = num_threads
         factory = SceneFactory(self.cfg)
-        cache = EquilibriumCache(self.cfg.statics)
-        self.cores = [InstallationCore(self.cfg, cache, factory) for _ in range(num_envs)]
+        equilibria = Equilibria(self.cfg.statics)
+        self.cores = [InstallationCore(self.cfg, equilibria, factory) for _ in range(num_envs)]
         limit = step_limit(self.cfg, max_episode_steps)
         for core in self.cores:
             core.max_steps = limit

@@ -1,5 +1,5 @@
-"""Fixtures of the agents tests: the ``tiny`` env config (millisecond episodes) with a per-session equilibrium
-folder, a tiny scenario set for it, and a tiny-budget training config."""
+"""Fixtures of the agents tests: the ``tiny`` env config (millisecond episodes), a tiny scenario set for it, and
+a tiny-budget training config."""
 
 from __future__ import annotations
 
@@ -10,9 +10,9 @@ from moor_env.envs import load_env_config
 
 
 @pytest.fixture(scope="session")
-def tiny_cfg(tmp_path_factory):
-    """The ``tiny`` env config, equilibria cached in a fresh session folder."""
-    return load_env_config("tiny", {"statics.dir": str(tmp_path_factory.mktemp("agents-equilibria"))})
+def tiny_cfg():
+    """The ``tiny`` env config."""
+    return load_env_config("tiny")
 
 
 @pytest.fixture(scope="session")
@@ -23,11 +23,12 @@ def tiny_scenarios():
             {"id": "current", "seed": 3, "options": {"current_scale": 1.0, "vessel_spacing_over_depth": 0.3}}]
 
 
-def tiny_train_config(out_dir, equilibria_dir, **changes) -> dict:
-    """A training config dict on the tiny env with a budget of tens of steps (in-process env)."""
+def tiny_train_config(out_dir, *_, **changes) -> dict:
+    """A training config dict on the tiny env with a budget of tens of steps (in-process env); further positional
+    arguments are ignored."""
     cfg = {
         "name": "t", "algo": "sac", "total_timesteps": 24, "seeds": [0], "n_envs": 1, "vec_env": "dummy",
-        "env": {"id": "moor_env/AnchorPlan-v0", "config": "tiny", "overrides": {"statics.dir": str(equilibria_dir)}},
+        "env": {"id": "moor_env/AnchorPlan-v0", "config": "tiny", "overrides": {}},
         "policy": {"net_arch": [16], "activation": "tanh"},
         "hyperparams": {"learning_starts": 8, "batch_size": 8, "buffer_size": 1000},
         "eval": {"freq_steps": 12, "episodes": 1}, "checkpoint": {"freq_steps": 12, "keep": 2},

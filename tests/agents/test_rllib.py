@@ -55,8 +55,7 @@ def local_ray():
 
 @pytest.mark.slow
 def test_two_iterations_on_local_ray_write_a_loadable_run(tmp_path, local_ray, tiny_cfg, tiny_scenarios):
-    cfg = load_rllib_config("rllib-tiny", {"out_dir": str(tmp_path), "env.overrides": {"statics.dir":
-                                                                                       str(tiny_cfg.statics.dir)}})
+    cfg = load_rllib_config("rllib-tiny", {"out_dir": str(tmp_path)})
     run_dir, meta = train_rllib(cfg)
 
     assert meta["status"] == "finished" and meta["iterations"] == 2

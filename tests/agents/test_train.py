@@ -28,7 +28,7 @@ RUN_FILES = {"config.yaml", "env_config.yaml", "scene.yaml", "meta.json", "model
     ("sac", "moor_env/AnchorRelease-v0", "dummy", 1, {}),
 ])
 def test_tiny_training_runs_and_evaluates(tmp_path, tiny_cfg, tiny_scenarios, algo, env_id, vec_env, n_envs, extra):
-    data = tiny_train_config(tmp_path, tiny_cfg.statics.dir, algo=algo, vec_env=vec_env, n_envs=n_envs,
+    data = tiny_train_config(tmp_path, algo=algo, vec_env=vec_env, n_envs=n_envs,
                              total_timesteps=32, **extra)
     data["env"]["id"] = env_id
     if algo == "ppo":
@@ -43,7 +43,7 @@ def test_tiny_training_runs_and_evaluates(tmp_path, tiny_cfg, tiny_scenarios, al
 
 
 def test_run_directory_contents(tmp_path, tiny_cfg):
-    cfg = load_train_config(tiny_train_config(tmp_path, tiny_cfg.statics.dir))
+    cfg = load_train_config(tiny_train_config(tmp_path))
     run_dir = train_seed(cfg, 0)
     names = {p.name for p in run_dir.iterdir()}
     assert RUN_FILES <= names and {"checkpoints", "best", "tb"} <= names
@@ -66,7 +66,7 @@ def test_run_directory_contents(tmp_path, tiny_cfg):
 
 
 def test_resume_continues_from_last_checkpoint(tmp_path, tiny_cfg):
-    data = tiny_train_config(tmp_path, tiny_cfg.statics.dir, total_timesteps=12)
+    data = tiny_train_config(tmp_path, total_timesteps=12)
     run_dir = train_seed(load_train_config(data), 0)
     first = json.loads((run_dir / "meta.json").read_text())
     data["total_timesteps"] = 24
@@ -105,7 +105,7 @@ def test_main_job_trains_evaluates_and_prints_the_table(tmp_path, tiny_cfg, tiny
 
     save_scenarios(tiny_scenarios[:2], tmp_path / "s.json")
     cfg_path = tmp_path / "t.yaml"
-    cfg_path.write_text(yaml.safe_dump(tiny_train_config(tmp_path / "runs", tiny_cfg.statics.dir, total_timesteps=12)))
+    cfg_path.write_text(yaml.safe_dump(tiny_train_config(tmp_path / "runs", total_timesteps=12)))
     args = ["--config", str(cfg_path), "--scenarios", str(tmp_path / "s.json"), "--jobs", "1",
             "--population", "2", "--iterations", "1"]
     assert main(args) == 0

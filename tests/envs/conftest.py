@@ -1,4 +1,4 @@
-"""Fixtures of the env tests: the ``tiny`` env config with equilibria cached in a per-session folder."""
+"""Fixtures of the env tests: overrides for the ``tiny`` and the default env config."""
 
 from __future__ import annotations
 
@@ -8,12 +8,12 @@ import moor_env  # noqa: F401 - registers the envs
 
 
 @pytest.fixture(scope="session")
-def tiny(tmp_path_factory) -> dict:
-    """Overrides for ``config="tiny"``: equilibria on disk in a fresh session folder (not the user's cache)."""
-    return {"statics.dir": str(tmp_path_factory.mktemp("equilibria"))}
+def tiny() -> dict:
+    """Overrides for ``config="tiny"`` (none: every reset solves its equilibrium)."""
+    return {}
 
 
 @pytest.fixture(scope="session")
-def default_overrides(tmp_path_factory) -> dict:
-    """Overrides for the default config: a session equilibrium folder."""
-    return {"statics.dir": str(tmp_path_factory.mktemp("equilibria-default"))}
+def default_overrides() -> dict:
+    """Overrides for the default config (none)."""
+    return {}

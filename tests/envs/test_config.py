@@ -62,11 +62,39 @@ def test_reset_options_fix_fields_and_reject_unknown(tiny):
         env.reset(options={"sea_state_hs_m": 30.0})
 
 
-def test_precompute_grid():
-    from moor_env.envs.equilibria import discrete_grid
+def test_geometry_is_drawn_from_ranges():
+    """The default config draws depth, spacing, line length and anchor mass from continuous ranges that span the
+    values the env was validated on; every draw lies in its range and the seeds give distinct geometries."""
+    import numpy as np
 
-    assert len(discrete_grid(load_env_config("tiny"))) == 4
-    # 3 depths x 3 spacings x 2 line lengths x 3 masses x (no current + 2 scales x 2 directions)
-    assert len(discrete_grid(load_env_config("anchor-release"))) == 270
-    with pytest.raises(ValueError, match="water_depth_m is continuous"):
-        discrete_grid(load_env_config("anchor-release", {"scenario.water_depth_m": {"uniform": [400.0, 600.0]}}))
+    from moor_env.envs.scenario import draw_scenario
+
+    cfg = load_env_config("anchor-release")
+    ranges = {"water_depth_m": (400.0, 600.0), "vessel_spacing_over_depth": (0.1, 0.3),
+              "mooring_line_length_over_depth": (1.04, 1.08), "anchor_mass_scale": (0.98, 1.02)}
+    for name, bounds in ranges.items():
+        assert getattr(cfg.scenario, name).uniform == bounds, name
+    draws = [draw_scenario(cfg, np.random.default_rng(seed)) for seed in range(40)]
+    for name, (lo, hi) in ranges.items():
+        values = [d[name] for d in draws]
+        assert all(lo <= v <= hi for v in values), name
+        assert len(set(values)) == len(values), name  # continuous: no value drawn twice
+    assert draw_scenario(cfg, np.random.default_rng(3)) == draws[3]  # seeded
+
+
+def test_distinct_geometries_over_reset_seeds(tiny):
+    env = gym.make("moor_env/AnchorRelease-v0", config="tiny", overrides=tiny)
+    spacings, keys = set(), set()
+    for seed in range(6):
+        _, info = env.reset(seed=1000 + seed)
+        assert info["statics"] == "solved" and info["scenario_redraws"] == 0
+        spacings.add(info["scenario"]["vessel_spacing_over_depth"])
+        keys.add(env.unwrapped.core.statics_key)
+    assert len(spacings) == len(keys) == 6 and all(0.15 <= s <= 0.3 for s in spacings)
+
+
+def test_statics_section_keeps_only_the_memory_lru():
+    with pytest.raises(ConfigError, match="statics.dir"):
+        load_env_config("tiny", {"statics.dir": "/tmp"})
+    with pytest.raises(ConfigError, match="statics.memory_entries"):
+        load_env_config("tiny", {"statics.memory_entries": -1})

@@ -1,4 +1,5 @@
-"""Same seed and actions give identical episodes (also from a cached equilibrium and across env instances)."""
+"""Same seed and actions give identical episodes (also from a kept equilibrium and across env instances); a drawn
+geometry without an equilibrium is drawn again."""
 
 from __future__ import annotations
 
@@ -6,10 +7,12 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
+from moor_env.config import scene_from_dict
 from moor_env.envs import equilibria, load_env_config
-from moor_env.envs.scenario import representative_scenario
+from moor_env.envs.scenario import MAX_SCENARIO_DRAWS, draw_scenario
 from moor_env.envs.scene import SceneFactory
-from moor_env.errors import StaticsNotConverged
+from moor_env.errors import ConfigError, NoEquilibrium
+from moor_env.simulation import solve_statics
 
 
 def _episode(env, seed, n_steps=12, action_seed=7):
@@ -51,39 +54,69 @@ def test_fixed_option_keeps_other_draws(tiny):
             assert fixed["scenario"][key] == value
 
 
-def test_cached_equilibrium_gives_identical_episode(tmp_path):
-    overrides = {"statics.dir": str(tmp_path)}
+def test_kept_equilibrium_gives_identical_episode(tiny):
+    """A geometry drawn again starts from the equilibrium kept in memory: the same episode as a fresh solve."""
     equilibria._SHARED_MEMORY.clear()
-    env = gym.make("moor_env/AnchorRelease-v0", config="tiny", overrides=overrides)
+    env = gym.make("moor_env/AnchorRelease-v0", config="tiny", overrides=tiny)
     obs_solved, rew_solved, _ = _episode(env, 11)
-    assert env.unwrapped.core.statics_origin in ("memory", "solved")
-    equilibria._SHARED_MEMORY.clear()  # next start reads the .npz written by the first
-    env2 = gym.make("moor_env/AnchorRelease-v0", config="tiny", overrides=overrides)
-    obs_disk, rew_disk, _ = _episode(env2, 11)
-    assert env2.unwrapped.core.statics_origin == "disk"
-    assert np.array_equal(obs_solved, obs_disk) and np.array_equal(rew_solved, rew_disk)
+    assert env.unwrapped.core.statics_origin == "solved"
+    obs_kept, rew_kept, _ = _episode(env, 11)
+    assert env.unwrapped.core.statics_origin == "memory"
+    fresh = gym.make("moor_env/AnchorRelease-v0", config="tiny", overrides={**tiny, "statics.memory_entries": 0})
+    obs_fresh, rew_fresh, _ = _episode(fresh, 11)
+    assert fresh.unwrapped.core.statics_origin == "solved"
+    for obs, rew in ((obs_kept, rew_kept), (obs_fresh, rew_fresh)):
+        assert np.array_equal(obs_solved, obs) and np.array_equal(rew_solved, rew)
 
 
-def test_a_failed_equilibrium_is_remembered_not_solved_again(tmp_path, monkeypatch):
-    """A geometry whose statics do not converge fails once per cache: later draws raise at once (in this process
-    from memory, in another from the ``.failed`` marker on disk) instead of repeating a solve of up to minutes."""
+def _refuse_first(monkeypatch, times):
+    """Make the env's solver refuse its first ``times`` calls with NoEquilibrium; the list of calls."""
     calls = []
 
-    def failing_solve(scene):
-        calls.append(scene.name)
-        raise StaticsNotConverged("static equilibrium not reached (test)")
+    def solve(model, **kwargs):
+        calls.append(model.scene.environment.water_depth_m)
+        if len(calls) <= times:
+            raise NoEquilibrium("installation.mooring_line_length_m", 1.0, "> 2 m", "the line is too short (test)")
+        return solve_statics(model, **kwargs)
 
-    monkeypatch.setattr(equilibria, "solve_statics", failing_solve)
-    monkeypatch.setattr(equilibria, "_SHARED_FAILURES", {})
-    cfg = load_env_config("tiny", {"statics.dir": str(tmp_path)})
-    factory = SceneFactory(cfg)
-    data = factory.statics_data(representative_scenario(cfg))
+    monkeypatch.setattr(equilibria, "solve_statics", solve)
+    return calls
+
+
+def test_a_geometry_without_equilibrium_is_drawn_again(tiny, monkeypatch):
     equilibria._SHARED_MEMORY.clear()
-    for _ in range(2):
-        with pytest.raises(StaticsNotConverged, match="not reached"):
-            equilibria.EquilibriumCache(cfg.statics).state(data)
-    assert len(calls) == 1
-    monkeypatch.setattr(equilibria, "_SHARED_FAILURES", {})  # another process: only the disk marker
-    with pytest.raises(StaticsNotConverged, match="cached failure"):
-        equilibria.EquilibriumCache(cfg.statics).state(data)
-    assert len(calls) == 1
+    env = gym.make("moor_env/AnchorRelease-v0", config="tiny", overrides=tiny)
+    _, plain = env.reset(seed=21)
+    equilibria._SHARED_MEMORY.clear()
+    _refuse_first(monkeypatch, 1)
+    obs, info = env.reset(seed=21)
+    assert info["scenario_redraws"] == 1 and info["statics"] == "solved"
+    assert info["scenario"] != plain["scenario"]  # the second draw of the same generator
+    assert np.all(np.isfinite(obs))
+    _, again = env.reset(seed=22)
+    assert again["scenario_redraws"] == 0
+
+
+def test_redraws_are_bounded_and_name_the_config_keys(tiny, monkeypatch):
+    env = gym.make("moor_env/AnchorRelease-v0", config="tiny", overrides={**tiny, "statics.memory_entries": 0})
+    calls = _refuse_first(monkeypatch, 10**6)
+    with pytest.raises(ConfigError, match="scenario.vessel_spacing_over_depth") as info:
+        env.reset(seed=0)
+    assert len(calls) == MAX_SCENARIO_DRAWS
+    assert "static equilibrium" in str(info.value) and "line is too short (test)" in str(info.value)
+    with pytest.raises(NoEquilibrium):  # a scenario fixed by options is not drawn again
+        env.reset(seed=0, options={"vessel_spacing_over_depth": 0.2})
+    assert len(calls) == MAX_SCENARIO_DRAWS + 1
+
+
+def test_statics_scene_from_template_equals_full_validation():
+    """A new geometry's statics scene is a template's with the geometry sections validated on their own: equal to
+    validating the whole mapping."""
+    cfg = load_env_config("anchor-release")
+    factory = SceneFactory(cfg)
+    rng = np.random.default_rng(4)
+    for hs in (0.0, 2.0, 0.0, 2.0, 0.0):
+        scenario = draw_scenario(cfg, rng, {"sea_state_hs_m": hs, "current_scale": float(rng.choice([0.0, 1.0]))})
+        data = factory.statics_data(scenario)
+        assert factory.statics_scene(data) == scene_from_dict(data)
+    assert len(factory.templates) == 2  # calm and in-waves pre-release resolutions
