@@ -401,7 +401,7 @@ def _hang_grounded(dx, dz, seabed_dz, sec_w, sec_ea, sec_len, total, weight, arc
                 break
         h = math.exp(0.5 * (lo + hi))
         span_lo, s_a, s_b = _grounded_span(h, rise_a, rise_b, sec_w, sec_ea, sec_len, total, ea_ground)
-    x_td = _walk_back(h, sec_w, sec_ea, sec_len, s_a, 0.0)[0]
+    x_td, _, v_top_a = _walk_back(h, sec_w, sec_ea, sec_len, s_a, 0.0)
     grounded = total - s_a - s_b
     stretch = 1.0 + h / ea_ground
     fold = 0.0
@@ -423,7 +423,7 @@ def _hang_grounded(dx, dz, seabed_dz, sec_w, sec_ea, sec_len, total, weight, arc
             x_b, z_b, _ = walk(h, 0.0, sec_w, sec_ea, sec_len, total - s_b, a)
             out[i, 0] = x_td + grounded * stretch - 2.0 * fold + x_b
             out[i, 1] = seabed_dz + z_b
-    return h, 0.0, mode
+    return h, -v_top_a, mode  # end A holds its suspended part: the line pulls it down
 
 
 @jit

@@ -37,6 +37,7 @@ from moor_env.physics.layout import (
     EF_DEPTH,
     EF_G,
     EF_RHO,
+    EF_SEABED_SMOOTHING,
     EF_SPEED_LIMIT,
     EF_STRAIN_LIMIT,
     LI_NSEG,
@@ -173,7 +174,7 @@ def compute_loads(node_pos, node_vel, body_state, body_active, node_i, node_f, s
                 node_force[n, 0] += k * rx
                 node_force[n, 1] += k * ry
                 node_force[n, 2] += k * rz
-        if node_pos[n, 2] < -env_f[EF_DEPTH]:
+        if node_pos[n, 2] < -env_f[EF_DEPTH] or env_f[EF_SEABED_SMOOTHING] > 0.0:
             fx, fy, fz = seabed_force(node_pos[n, 2], node_vel[n, 0], node_vel[n, 1], node_vel[n, 2],
                                       node_contact[n], env_f)
             node_force[n, 0] += fx

@@ -94,7 +94,8 @@ EF_TRACK_DT = 11
 EF_SPEED_LIMIT = 12
 EF_STRAIN_LIMIT = 13
 EF_SLACK_SMOOTHING = 14  # statics only: strain scale of the smoothed tension-only law (0 = exact)
-N_ENV_F = 15
+EF_SEABED_SMOOTHING = 15  # statics only: penetration scale of the smoothed seabed contact [m] (0 = exact)
+N_ENV_F = 16
 
 # body_f slots (anchor rigid body)
 BF_ACTIVE = 0

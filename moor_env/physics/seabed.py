@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 from moor_env.physics._jit import jit
-from moor_env.physics.layout import EF_CBOT, EF_DEPTH, EF_FRIC_V, EF_KBOT, EF_MU
+from moor_env.physics.layout import EF_CBOT, EF_DEPTH, EF_FRIC_V, EF_KBOT, EF_MU, EF_SEABED_SMOOTHING
 
 
 @jit
@@ -30,6 +30,9 @@ def seabed_force(z, vx, vy, vz, contact_area, env_f):
         Environment slots (see ``layout``).
     """
     penetration = -env_f[EF_DEPTH] - z
+    smoothing = env_f[EF_SEABED_SMOOTHING]
+    if smoothing > 0.0:  # the static solver's smoothed contact (velocities are zero there)
+        penetration = 0.5 * (penetration + math.sqrt(penetration * penetration + smoothing * smoothing))
     if penetration <= 0.0 or contact_area <= 0.0:
         return 0.0, 0.0, 0.0
     fz = (env_f[EF_KBOT] * penetration - env_f[EF_CBOT] * vz) * contact_area

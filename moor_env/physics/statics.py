@@ -48,6 +48,9 @@ from moor_env.physics.tree import OR_EFF, OR_ORDER, TR_DEG, TR_NB, TR_SEG, build
 
 SMOOTHING_START = 1e-6
 SMOOTHING_FINAL = 1e-8
+# seabed contact smoothed over 1 cm at the start, 0.1 mm at the end (its force at zero penetration is then
+# k_bot A 5e-5 m, about 1 N on a 2 m chain segment against 6.6 kN of weight)
+SEABED_SMOOTHING_M_PER_STRAIN = 1e4
 SLACK_STIFFNESS = 1.0  # axial stiffness of a compressed segment in K, as a fraction of EA / l0
 PHASE_ITERATIONS = 30  # iterations on one smoothing level before it is lowered anyway
 MAX_ROTATION_RAD = 0.2  # largest anchor tilt change per Newton step
@@ -92,6 +95,14 @@ def _basis(body_state, basis):
     basis[1, 0] = ey * basis[0, 2] - ez * basis[0, 1]
     basis[1, 1] = ez * basis[0, 0] - ex * basis[0, 2]
     basis[1, 2] = ex * basis[0, 1] - ey * basis[0, 0]
+
+
+@jit_step
+def _set_smoothing(env_f, slack):
+    """The statics-only smoothing of the tension-only law (strain scale ``slack``) and of the seabed contact
+    (penetration scale ``SEABED_SMOOTHING_M_PER_STRAIN * slack``): both kinks relax and sharpen together."""
+    env_f[L.EF_SLACK_SMOOTHING] = slack
+    env_f[L.EF_SEABED_SMOOTHING] = SEABED_SMOOTHING_M_PER_STRAIN * slack
 
 
 @jit_step
@@ -158,10 +169,16 @@ def _assemble(tau, body_node, node_pos, seg_i, seg_f, mat_f, env_f, current_prof
                 dmat[n, c, c] = m
     depth = env_f[L.EF_DEPTH]
     kbot = env_f[L.EF_KBOT]
+    soft = env_f[L.EF_SEABED_SMOOTHING]
     for n in range(nn):
         e = orow[n, OR_EFF]
-        # at zero penetration too: a node laid on the seabed by the guess rests on it
-        if e >= 0 and e != body_node and node_contact[n] > 0.0 and -depth - node_pos[n, 2] >= 0.0:
+        if e < 0 or e == body_node or node_contact[n] <= 0.0:
+            continue
+        penetration = -depth - node_pos[n, 2]
+        if soft > 0.0:  # slope of the smoothed contact (physics/seabed.py)
+            slope = 0.5 * (1.0 + penetration / math.sqrt(penetration * penetration + soft * soft))
+            dmat[e, 2, 2] += kbot * node_contact[n] * slope
+        elif penetration >= 0.0:
             dmat[e, 2, 2] += kbot * node_contact[n]
     smoothing = env_f[L.EF_SLACK_SMOOTHING]
     rho = env_f[L.EF_RHO]
@@ -404,7 +421,7 @@ def newton_statics(ctl, max_iter, body_node, node_pos, node_vel, body_state, bod
     axis0 = np.zeros(3)
     tau = ctl[C_TAU]
     tol = ctl[C_TOL]
-    env_f[L.EF_SLACK_SMOOTHING] = ctl[C_SMOOTHING]
+    _set_smoothing(env_f, ctl[C_SMOOTHING])
     norm2, worst = _residual(body_node, basis, res_body, node_pos, node_vel, body_state, body_active, node_i, node_f,
                              seg_i, seg_f, mat_f, line_f, body_f, body_q, env_f, current_profile, tracks, node_force,
                              node_mm, node_mass, node_contact, seg_tension, body_load, body_acc)
@@ -423,7 +440,7 @@ def newton_statics(ctl, max_iter, body_node, node_pos, node_vel, body_state, bod
             status = STATUS_CONVERGED
             break
         if not final and (worst < 10.0 * tol or ctl[C_PHASE_IT] >= PHASE_ITERATIONS):
-            env_f[L.EF_SLACK_SMOOTHING] = max(0.1 * smoothing, SMOOTHING_FINAL)
+            _set_smoothing(env_f, max(0.1 * smoothing, SMOOTHING_FINAL))
             ctl[C_PHASE_IT] = 0.0
             norm2, worst = _residual(body_node, basis, res_body, node_pos, node_vel, body_state, body_active, node_i,
                                      node_f, seg_i, seg_f, mat_f, line_f, body_f, body_q, env_f, current_profile,
@@ -501,7 +518,7 @@ def newton_statics(ctl, max_iter, body_node, node_pos, node_vel, body_state, bod
     ctl[C_SMOOTHING] = env_f[L.EF_SLACK_SMOOTHING]
     ctl[C_STATUS] = status
     ctl[C_RESIDUAL] = worst
-    env_f[L.EF_SLACK_SMOOTHING] = 0.0
+    _set_smoothing(env_f, 0.0)
     return status
 
 

@@ -72,14 +72,42 @@ def _hang(sim, name: str, a: np.ndarray, b: np.ndarray, place: bool) -> tuple[fl
             h_d, v_d, ok = discrete_hang(dx, dz, h, v_a, node_w, seg_l0, seg_ea, walked)
             if ok and np.min(walked[:, 1]) >= seabed_dz:
                 out[:] = walked[:-1]
+        elif mode == 1:
+            _discrete_suspended_parts(sim, name, out, h, dx, dz, seabed_dz)
         nodes = _interior_nodes(sim, name)
         pos = sim.state.node_pos
         pos[nodes, 0] = a[0] + u[0] * out[:, 0]
         pos[nodes, 1] = a[1] + u[1] * out[:, 0]
         pos[nodes, 2] = a[2] + out[:, 1]
-        _sink_into_seabed(sim, name, nodes, arcs, sec_w, sec_len)
     top = math.hypot(h, v_a + float(np.sum(sec_w * sec_len)))
     return h, v_a, top
+
+
+def _discrete_suspended_parts(sim, name: str, out: np.ndarray, h: float, dx: float, dz: float,
+                              seabed_dz: float) -> None:
+    """Replace the two suspended parts of a grounded line's catenary shape in ``out`` by the discrete model's
+    own equilibrium between each end and its touchdown node (near a touchdown with little horizontal force the
+    catenary bends within one segment, where chords and arcs differ most)."""
+    grounded = np.nonzero(out[:, 1] <= seabed_dz + 1e-9)[0]
+    if grounded.size == 0:
+        return
+    node_w, seg_l0, seg_ea = _lumped(sim, name)
+    first, last = int(grounded[0]), int(grounded[-1])
+    j = first + 1  # local index of the first touchdown node; segments 0..j-1 hang from end A to it
+    if j >= 2:
+        piece = np.zeros((j, 2))
+        weight = float(np.sum(node_w[1:j]))
+        _, _, ok = discrete_hang(float(out[first, 0]), float(out[first, 1]), h, -weight, node_w[:j], seg_l0[:j],
+                                 seg_ea[:j], piece)
+        if ok and np.min(piece[:, 1]) >= seabed_dz - 1e-6:
+            out[:first] = piece[:-1]
+    j2 = last + 1  # local index of the last touchdown node; segments j2.. rise to end B
+    if seg_l0.size - j2 >= 2:
+        piece = np.zeros((seg_l0.size - j2, 2))
+        _, _, ok = discrete_hang(dx - float(out[last, 0]), dz - float(out[last, 1]), h, 0.5 * node_w[j2],
+                                 node_w[j2:], seg_l0[j2:], seg_ea[j2:], piece)
+        if ok and np.min(piece[:, 1]) >= -1e-6:
+            out[last + 1:] = out[last] + piece[:-1]
 
 
 def _lumped(sim, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -94,20 +122,6 @@ def _lumped(sim, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     node_w = np.zeros(nseg)
     node_w[1:] = half[:-1] + half[1:]
     return node_w, seg_l0, m.mat_f[mats, L.MF_EA].copy()
-
-
-def _sink_into_seabed(sim, name: str, nodes: np.ndarray, arcs: np.ndarray, sec_w: np.ndarray,
-                      sec_len: np.ndarray) -> None:
-    """Lower the nodes laid on the seabed by the penetration that carries their weight (w / (k_bot D))."""
-    seabed = -sim.env_f[L.EF_DEPTH]
-    on = sim.state.node_pos[nodes, 2] <= seabed + 1e-9
-    if not np.any(on):
-        return
-    _, _, _, sec_mat, _ = line_arrays(sim, name)
-    section = np.minimum(np.searchsorted(np.cumsum(sec_len), arcs), sec_len.size - 1)
-    diameter = sim.model.mat_f[sec_mat[section], L.MF_D]
-    penetration = sec_w[section] / (sim.env_f[L.EF_KBOT] * np.maximum(diameter, 1e-6))
-    sim.state.node_pos[nodes[on], 2] = seabed - penetration[on]
 
 
 def _hang_vertical(sim, name: str, bottom: np.ndarray, bottom_force_n: float) -> float:

@@ -16,6 +16,7 @@ from moor_env import SimulationDiverged, load_scene, simulate_drop, solve_static
 from moor_env.compile import compile_scene
 from moor_env.config import scene_dict, scene_from_dict
 from moor_env.physics import implicit as I
+from moor_env.physics import tree as T
 from moor_env.physics import layout as L
 from moor_env.simulation import run_drop
 
@@ -120,7 +121,7 @@ def test_tree_solver_matches_a_dense_solve():
     tree = w.pos0.view(np.int64)
     orow = w.vel0.view(np.int64)
     I._setup(body_node, st.node_i, st.seg_i, w.seg_tension, tree, orow)
-    nq = I._order(body_node, st.node_i, st.seg_i, tree, orow)
+    nq = T.order(body_node, st.node_i, st.seg_i, tree, orow)
     I._assemble(h, True, body_node, st.node_pos, st.node_vel, st.node_i, st.node_f, st.seg_i, st.seg_f, m.mat_f,
                 sim.env_f, m.current_profile, w.node_force, w.node_mm, w.node_mass, w.node_contact, w.node_acc,
                 w.seg_tension, orow)
