@@ -620,7 +620,10 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 150, max_step_
     except (StaticsNotConverged, SimulationDiverged):
         _restore(sim.state, start)
         sim.state.t = start.t
-        return statics_relaxation.solve_equilibrium(sim, tol_rel=tol_rel, warm=warm, analytic_guess=analytic_guess)
+        with tqdm(desc="statics (relaxation)", unit="s relaxed", disable=not progress, leave=False,
+                  delay=PROGRESS_AFTER_S) as bar:
+            return statics_relaxation.solve_equilibrium(sim, tol_rel=tol_rel, warm=warm,
+                                                        analytic_guess=analytic_guess, tick=bar.update)
 
 
 def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = 150, max_step_m: float = 20.0,

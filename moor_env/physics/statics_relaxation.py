@@ -244,11 +244,11 @@ CONTINUATION_ITERATIONS = 30
 RELAXATION_ROUNDS = 10  # rounds of 30 s relaxation + Newton always tried when Newton fails from the guess
 MAX_RELAXATION_ROUNDS = 30  # beyond RELAXATION_ROUNDS, only while the rounds still shrink the residual ...
 ROUND_PROGRESS = 0.9  # ... to below this fraction of the best so far (a fine slack loop creeps in slowly) ...
-STALLED_ROUNDS = 2  # ... in one of the last this many rounds (measured: one round stalled at 2.2e-4, the next converged)
+STALLED_ROUNDS = 2  # ... in one of the last this many rounds (one round stalled at 2.2e-4, the next converged)
 
 
 def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 300, max_step_m: float = 20.0,
-                      warm: bool = False, analytic_guess: bool = True) -> StaticsReport:
+                      warm: bool = False, analytic_guess: bool = True, tick=None) -> StaticsReport:
     """Drive the simulator's current state to static equilibrium in place.
 
     Strategy (each stage is cheap when the previous one did its job):
@@ -279,7 +279,7 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 300, max_step_
             pass
     elif analytic_guess:
         first_guess(sim)
-    relax_dynamically(sim, max_time_s=2.0)
+    relax_dynamically(sim, max_time_s=2.0, tick=tick)
     try:
         return _continuation(sim, 1e-6, tol_rel, max_iter, max_step_m, 1.0)
     except StaticsNotConverged:
@@ -289,7 +289,7 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 300, max_step_
     best = math.inf
     stalled = 0
     for rounds in range(1, MAX_RELAXATION_ROUNDS + 1):
-        relax_dynamically(sim, max_time_s=30.0)
+        relax_dynamically(sim, max_time_s=30.0, tick=tick)
         try:
             return _continuation(sim, 1e-6, tol_rel, 150, max_step_m, 1.0)
         except StaticsNotConverged as exc:
@@ -394,7 +394,8 @@ def _solve_phase(sim, tol_rel: float, max_iter: int, max_step_m: float, tau0_s: 
         residual_rel)
 
 
-def relax_dynamically(sim, max_time_s: float = 120.0, chunk_steps: int = 25, tol_rel: float = 5e-3) -> float:
+def relax_dynamically(sim, max_time_s: float = 120.0, chunk_steps: int = 25, tol_rel: float = 5e-3,
+                      tick=None) -> float:
     """Kinetic-damping dynamic relaxation with the dynamic kernel: integrate from the current state and zero
     every velocity whenever the total kinetic energy starts to fall (it has just passed an energy peak, the
     best estimate of the rest position along the dominant motion). Robust from any guess, linear in cost;
@@ -413,11 +414,14 @@ def relax_dynamically(sim, max_time_s: float = 120.0, chunk_steps: int = 25, tol
         while elapsed < max_time_s:
             st.t = 0.0  # vessels stay at their mean positions: no wave ramp, no spacing move
             sim.advance_to(chunk_steps * sim.dt)
+            if tick is not None:
+                tick(chunk_steps * sim.dt)
             elapsed += chunk_steps * sim.dt
             free = st.node_i[:, L.NI_KIND] == L.NODE_FREE
             kinetic = float(np.sum(sim.work.node_mass[free] * np.sum(st.node_vel[free] ** 2, axis=1)))
             if sim.model.body_active:
-                kinetic += sim.model.body_f[L.BF_MASS_AXIAL] * float(st.body_state[L.BS_VEL:L.BS_VEL + 3] @ st.body_state[L.BS_VEL:L.BS_VEL + 3])
+                body_v = st.body_state[L.BS_VEL:L.BS_VEL + 3]
+                kinetic += sim.model.body_f[L.BF_MASS_AXIAL] * float(body_v @ body_v)
             if kinetic < previous:
                 st.node_vel[:] = 0.0
                 st.body_state[L.BS_VEL:L.BS_VEL + 3] = 0.0
