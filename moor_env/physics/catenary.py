@@ -486,3 +486,28 @@ def discrete_hang(dx, dz, h0, va0, node_w, seg_l0, seg_ea, out):
         va += step_v
     discrete_walk(math.exp(u), va, node_w, seg_l0, seg_ea, out)
     return math.exp(u), va, False
+
+
+@jit
+def discrete_rise_h(rise, node_w, seg_l0, seg_ea, out):
+    """Horizontal force under which the lumped-mass line rising from a touchdown node (segment 0 starts there,
+    horizontal: no vertical force) climbs ``rise`` by its last node; returns (H, converged) and the node offsets
+    from the touchdown in ``out``. The rise falls as H grows: bisection on log H."""
+    weight = 0.0
+    for k in range(1, node_w.shape[0]):
+        weight += node_w[k]
+    lo = math.log(1e-9 * weight + 1e-6)
+    hi = math.log(1e3 * weight + 1.0)
+    if discrete_walk(math.exp(lo), 0.0, node_w, seg_l0, seg_ea, out)[1] < rise:
+        return math.exp(lo), False  # too short to rise that far even hanging straight
+    for _ in range(ROOT_ITERATIONS):
+        mid = 0.5 * (lo + hi)
+        if discrete_walk(math.exp(mid), 0.0, node_w, seg_l0, seg_ea, out)[1] > rise:
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo < 1e-12:
+            break
+    h = math.exp(0.5 * (lo + hi))
+    discrete_walk(h, 0.0, node_w, seg_l0, seg_ea, out)
+    return h, True

@@ -20,7 +20,7 @@ import numpy as np
 
 from moor_env.errors import NoEquilibrium
 from moor_env.physics import layout as L
-from moor_env.physics.catenary import discrete_hang, hang_line, walk
+from moor_env.physics.catenary import discrete_hang, discrete_rise_h, hang_line, walk
 from moor_env.physics.integrate import set_constrained_nodes
 
 BALANCE_ROUNDS = 60
@@ -86,28 +86,46 @@ def _hang(sim, name: str, a: np.ndarray, b: np.ndarray, place: bool) -> tuple[fl
 def _discrete_suspended_parts(sim, name: str, out: np.ndarray, h: float, dx: float, dz: float,
                               seabed_dz: float) -> None:
     """Replace the two suspended parts of a grounded line's catenary shape in ``out`` by the discrete model's
-    own equilibrium between each end and its touchdown node (near a touchdown with little horizontal force the
-    catenary bends within one segment, where chords and arcs differ most)."""
+    own equilibrium rising from each touchdown node to its end (near a touchdown with little horizontal force
+    the catenary bends within one segment, where chords and arcs differ most), and lay the nodes between the two
+    touchdowns evenly on the seabed."""
     grounded = np.nonzero(out[:, 1] <= seabed_dz + 1e-9)[0]
     if grounded.size == 0:
         return
     node_w, seg_l0, seg_ea = _lumped(sim, name)
-    first, last = int(grounded[0]), int(grounded[-1])
-    j = first + 1  # local index of the first touchdown node; segments 0..j-1 hang from end A to it
-    if j >= 2:
+    j, j2 = int(grounded[0]) + 1, int(grounded[-1]) + 1  # local indices of the two touchdown nodes
+    n = seg_l0.size
+    new = out.copy()
+    x_a = 0.0
+    ok = j < 1
+    while not ok and j < j2:  # from touchdown node j back up to end A: segments j-1 .. 0
         piece = np.zeros((j, 2))
-        weight = float(np.sum(node_w[1:j]))
-        _, _, ok = discrete_hang(float(out[first, 0]), float(out[first, 1]), h, -weight, node_w[:j], seg_l0[:j],
-                                 seg_ea[:j], piece)
-        if ok and np.min(piece[:, 1]) >= seabed_dz - 1e-6:
-            out[:first] = piece[:-1]
-    j2 = last + 1  # local index of the last touchdown node; segments j2.. rise to end B
-    if seg_l0.size - j2 >= 2:
-        piece = np.zeros((seg_l0.size - j2, 2))
-        _, _, ok = discrete_hang(dx - float(out[last, 0]), dz - float(out[last, 1]), h, 0.5 * node_w[j2],
-                                 node_w[j2:], seg_l0[j2:], seg_ea[j2:], piece)
-        if ok and np.min(piece[:, 1]) >= -1e-6:
-            out[last + 1:] = out[last] + piece[:-1]
+        _, ok = discrete_rise_h(-seabed_dz, node_w[1:j + 1][::-1].copy(), seg_l0[:j][::-1].copy(),
+                                seg_ea[:j][::-1].copy(), piece)
+        j += 0 if ok else 1  # too short to rise to end A: touch down one node further on
+    if not ok:
+        return
+    if j >= 1:
+        x_a = float(piece[-1, 0])  # the touchdown lies this far from end A
+        for k in range(j - 1):  # local node j - 1 - k
+            new[j - 2 - k] = (x_a - piece[k, 0], seabed_dz + piece[k, 1])
+    x_b = dx
+    ok = n - j2 < 1
+    while not ok and j2 > j:  # from touchdown node j2 up to end B: segments j2 .. n-1
+        piece = np.zeros((n - j2, 2))
+        _, ok = discrete_rise_h(dz - seabed_dz, node_w[j2:].copy(), seg_l0[j2:].copy(), seg_ea[j2:].copy(), piece)
+        j2 -= 0 if ok else 1
+    if not ok:
+        return
+    if n - j2 >= 1:
+        x_b = dx - float(piece[-1, 0])
+        for k in range(n - j2 - 1):  # local node j2 + 1 + k
+            new[j2 + k] = (x_b + piece[k, 0], seabed_dz + piece[k, 1])
+    # the grounded nodes j .. j2, evenly from one touchdown to the other
+    for local in range(j, j2 + 1):
+        f = (local - j) / max(j2 - j, 1)
+        new[local - 1] = (x_a + f * (x_b - x_a), seabed_dz)
+    out[:] = new
 
 
 def _lumped(sim, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
