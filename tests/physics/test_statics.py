@@ -135,7 +135,7 @@ def test_relaxation_rounds_continue_only_while_the_residual_shrinks(monkeypatch,
         return statics.StaticsReport(1, 0.0, 0.0, 1)
 
     monkeypatch.setattr(statics, "_continuation", scripted_newton)
-    monkeypatch.setattr(statics, "relax_dynamically", lambda sim, max_time_s: max_time_s)
+    monkeypatch.setattr(statics, "relax_dynamically", lambda sim, max_time_s, tick=None: max_time_s)
     monkeypatch.setattr(statics, "first_guess", lambda sim: None)
     sim = Simulator(compile_scene(load_scene("gjoa-500")))
     if converges:
