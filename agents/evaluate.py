@@ -16,13 +16,23 @@ Python::
 Command line::
 
     python -m agents.evaluate runs/plan-sac crew random optimiser [--scenarios FILE] [--n-scenarios 24]
+        [--records benchmarks/results/rl_evaluation.json] [--bootstrap-samples 10000] [--bootstrap-seed 0]
 
 A result (``evaluate_policy``) is a dict: ``policy``, ``env_id``, ``episodes`` (one record per scenario:
 ``touchdown_speed_m_s``, ``tilt_deg``, ``reward``, ``success``, ``limits_exceeded``, ``sim_status``,
 ``chain_past_back_end_m`` ...) and ``summary`` (:func:`summarize`; ``chain_inside``: touchdowns whose vertical
 chain had fallen past the anchor's back end, which the model has no contact to stop, so that their speed and tilt
 rest on an unmodelled part of the fall: README "Accuracy of the fall"). Several results of one policy trained with
-different seeds combine with :func:`combine_seeds` (t-interval over the seeds' means).
+different seeds combine with :func:`combine_seeds` (t-interval over the seeds' means; each pooled episode keeps
+its ``run``).
+
+**Statistics** (:mod:`agents.statistics`, :func:`agents.statistics.evaluation_statistics`): success rates with
+Wilson intervals, paired differences on the same scenarios (trained policy minus crew, crew minus random, optimiser
+minus crew: paired bootstrap interval, discordant counts, exact McNemar p-value), IQM over training seeds with a
+stratified bootstrap interval, and the task check (crew beats random, optimiser beats crew, each trained policy
+beats crew: PASS where the paired interval lies above 0). The command line prints them, stores them in
+``evaluation.json`` and writes every policy's per-episode records (:func:`episode_records`) with them to
+``--records`` (default ``benchmarks/results/rl_evaluation.json``).
 
 **Success** (:func:`agents.success.success_of`): touchdown with tilt below ``SUCCESS_TILT_DEG`` (2 deg, the Gjoa
 result; the DPA criterion is 5 deg) and speed at or above the env config's ``reward.required_speed_m_s`` (24 m/s),
@@ -50,6 +60,8 @@ from agents.baselines import BASELINES, PLAN_ENV, RELEASE_ENV, make_baseline
 from agents.io import write_atomic, write_json_atomic, write_text_atomic
 from agents.policy import EpisodeContext, Policy
 from agents.scenarios import DEFAULT_COUNT, held_out_scenarios, load_scenarios
+from agents.statistics import BOOTSTRAP_SAMPLES as STATS_BOOTSTRAP_SAMPLES
+from agents.statistics import BOOTSTRAP_SEED, evaluation_statistics, format_statistics, wilson_interval
 from agents.success import LIMIT_TERMS, SUCCESS_TILT_DEG, success_of
 from agents.train_rllib import load_run_policies
 from moor_env.envs.config import EnvConfig, load_env_config
@@ -58,13 +70,17 @@ from moor_env.errors import ConfigError, StaticsNotConverged
 CONFIDENCE = 0.95
 BOOTSTRAP_SAMPLES = 2000
 ENV_ALIASES = {"plan": PLAN_ENV, "release": RELEASE_ENV}
+RECORDS_PATH = "benchmarks/results/rl_evaluation.json"
+RECORD_KEYS = ("policy", "run", "scenario", "seed", "success", "touchdown_speed_m_s", "required_speed_m_s",
+               "tilt_deg", "offset_m", "limits_exceeded", "reward")
 
 
 # --- episodes ----------------------------------------------------------------------------------------------------
 def run_episode(env: gym.Env, policy: Policy, scenario: dict[str, Any], env_id: str, cfg: EnvConfig) -> dict:
     """Run ``policy`` on one scenario to the episode's end; returns the episode record."""
     t0 = time.perf_counter()
-    record: dict[str, Any] = {"scenario": scenario["id"], "seed": scenario["seed"]}
+    record: dict[str, Any] = {"scenario": scenario["id"], "seed": scenario["seed"],
+                              "required_speed_m_s": float(cfg.reward.required_speed_m_s)}
     try:
         obs, info = env.reset(seed=scenario["seed"], options=scenario["options"])
     except (ConfigError, StaticsNotConverged) as exc:
@@ -211,7 +227,8 @@ def _stats(values: np.ndarray) -> dict[str, float]:
 
 
 def summarize(episodes: list[dict[str, Any]]) -> dict[str, Any]:
-    """Success rate, speed, tilt and reward statistics with bootstrap 95 % intervals over the scenarios."""
+    """Success rate with its Wilson 95 % interval; speed, tilt and reward statistics, the mean reward with a
+    bootstrap 95 % interval over the scenarios."""
     col = {k: np.array([e[k] for e in episodes], dtype=np.float64)
            for k in ("success", "touchdown_speed_m_s", "tilt_deg", "reward")}
     limits: dict[str, int] = {}
@@ -222,7 +239,7 @@ def summarize(episodes: list[dict[str, Any]]) -> dict[str, Any]:
         "episodes": len(episodes),
         "touchdowns": int(sum(e["touchdown"] for e in episodes)),
         "success_rate": float(col["success"].mean()),
-        "success_ci": bootstrap_ci(col["success"]),
+        "success_ci": wilson_interval(int(col["success"].sum()), len(episodes)),
         "speed_m_s": _stats(col["touchdown_speed_m_s"]),
         "tilt_deg": _stats(col["tilt_deg"]),
         "reward": {**_stats(col["reward"]), "ci": bootstrap_ci(col["reward"])},
@@ -233,10 +250,11 @@ def summarize(episodes: list[dict[str, Any]]) -> dict[str, Any]:
 
 
 def combine_seeds(results: list[dict[str, Any]], name: str | None = None) -> dict[str, Any]:
-    """One policy trained with several seeds: pooled episodes, and t-intervals over the seeds' means."""
+    """One policy trained with several seeds: pooled episodes (each tagged with its ``run``, the seed result's
+    policy name), and t-intervals over the seeds' means."""
     if not results:
         raise ValueError("combine_seeds needs at least one result")
-    episodes = [e for r in results for e in r["episodes"]]
+    episodes = [{**e, "run": e.get("run", r["policy"])} for r in results for e in r["episodes"]]
     summary = summarize(episodes)
     per_seed = {k: [r["summary"][k] if k == "success_rate" else r["summary"][k]["mean"] for r in results]
                 for k in ("success_rate", "speed_m_s", "tilt_deg", "reward")}
@@ -363,14 +381,46 @@ def evaluate_targets(targets: list[str], scenarios: list[dict[str, Any]], env: s
     return results
 
 
+def _json_value(value: Any) -> Any:
+    """A record value as strict JSON: NaN and infinities become None, numpy scalars Python numbers."""
+    if isinstance(value, (list, tuple)):
+        return [_json_value(v) for v in value]
+    if hasattr(value, "item"):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def episode_records(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """One flat record per episode of every result, keys :data:`RECORD_KEYS` (``run``: the training run of a
+    policy trained with several seeds, else the policy; missing values None)."""
+    records = []
+    for r in results:
+        for e in r["episodes"]:
+            rec = {**e, "policy": r["policy"], "run": e.get("run", r["policy"])}
+            records.append({k: _json_value(rec.get(k)) for k in RECORD_KEYS})
+    return records
+
+
+def write_records(results: list[dict[str, Any]], path: str | Path, statistics: dict[str, Any] | None = None,
+                  meta: dict[str, Any] | None = None) -> Path:
+    """Write the per-episode records of every policy (:func:`episode_records`) and the statistics as JSON."""
+    data = {"meta": meta or {}, "statistics": statistics or {}, "episodes": episode_records(results)}
+    return write_json_atomic(path, data)
+
+
 def write_report(results: list[dict[str, Any]], out_dir: str | Path, scenarios: list[dict[str, Any]],
-                 meta: dict[str, Any] | None = None) -> dict[str, Path]:
-    """Write ``evaluation.json``, ``evaluation.md`` and ``distributions.png`` into ``out_dir``."""
+                 meta: dict[str, Any] | None = None, statistics: dict[str, Any] | None = None) -> dict[str, Path]:
+    """Write ``evaluation.json`` (with ``statistics`` where given), ``evaluation.md`` and ``distributions.png``
+    into ``out_dir``."""
     out = Path(out_dir)
     table = markdown_table(results)
+    body = {"meta": meta or {}, "scenarios": scenarios, "results": results}
+    if statistics is not None:
+        body["statistics"] = statistics
     paths = {
-        "json": write_json_atomic(out / "evaluation.json",
-                                  {"meta": meta or {}, "scenarios": scenarios, "results": results}),
+        "json": write_json_atomic(out / "evaluation.json", body),
         "markdown": write_text_atomic(out / "evaluation.md", table),
         "plot": plot_distributions(results, out / "distributions.png"),
     }
@@ -391,6 +441,10 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--population", type=int, default=8, help="optimiser: candidates per iteration")
     p.add_argument("--iterations", type=int, default=3, help="optimiser: cross-entropy iterations")
     p.add_argument("--render", action="store_true", help="also save a rendered episode of the first target")
+    p.add_argument("--records", default=RECORDS_PATH, help="per-episode records and statistics (JSON)")
+    p.add_argument("--bootstrap-samples", type=int, default=STATS_BOOTSTRAP_SAMPLES,
+                   help="resamples of the paired and stratified bootstraps")
+    p.add_argument("--bootstrap-seed", type=int, default=BOOTSTRAP_SEED, help="seed of the bootstraps")
     p.add_argument("--no-progress", action="store_true")
     return p.parse_args(argv)
 
@@ -407,7 +461,10 @@ def main(argv: list[str] | None = None) -> int:
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    write_report(results, args.out, scenarios, {"argv": sys.argv[1:] if argv is None else argv})
+    meta = {"argv": sys.argv[1:] if argv is None else argv}
+    stats = evaluation_statistics(results, args.bootstrap_samples, args.bootstrap_seed)
+    write_report(results, args.out, scenarios, meta, stats)
+    write_records(results, args.records, stats, {**meta, "scenarios": scenarios})
     if args.render:
         first = args.targets[0]
         policy = (make_baseline(first, results[0]["env_id"]) if first in BASELINES
@@ -415,7 +472,8 @@ def main(argv: list[str] | None = None) -> int:
         render_episode(policy, scenarios[0], Path(args.out) / "episode.png", results[0]["env_id"],
                        getattr(policy, "env_config", args.env_config))
     print(markdown_table(results))
-    print(f"written to {args.out}/ (evaluation.json, evaluation.md, distributions.png)")
+    print(format_statistics(stats))
+    print(f"written to {args.out}/ (evaluation.json, evaluation.md, distributions.png) and {args.records}")
     return 0
 
 

@@ -79,7 +79,8 @@ def test_command_line(tmp_path, tiny_cfg, tiny_scenarios, capsys):
     cfg_path = tmp_path / "tiny.yaml"
     cfg_path.write_text(json.dumps(tiny_cfg.model_dump(mode="json")))  # JSON is YAML
     rc = main(["crew", "random", "--scenarios", str(tmp_path / "s.json"), "--env", "release",
-               "--env-config", str(cfg_path), "--out", str(tmp_path / "out"), "--no-progress"])
+               "--env-config", str(cfg_path), "--out", str(tmp_path / "out"), "--no-progress",
+               "--records", str(tmp_path / "rl_evaluation.json")])
     assert rc == 0
     out = capsys.readouterr().out
     assert "| crew | AnchorRelease-v0 | 2 (1) |" in out
