@@ -3,11 +3,14 @@
 Draws scenes from the gjoa-500 installation with depth 300-1500 m, vessel spacing 0-0.5 depth, mooring line
 0.95-1.3 depth, vertical chain 5-60 m, drop height 30-120 m, current scale 0-1.5 in any direction, anchor mass
 +-10 % and a fidelity preset each (seeded). For each: the time to compile the scene and the time from the compiled
-model to the result (one core, kernels compiled beforehand), and whether it converged, was refused as having no
-equilibrium (with its cause) or failed. On the first ``--reference`` scenes the reference solver of
-``moor_env/physics/statics_relaxation.py`` (the fallback) runs too: release point and top tensions are compared.
+model to the result by Newton's method (one core, kernels compiled beforehand, no fallback), and whether it
+converged, was refused as having no equilibrium (with its cause) or needs the fallback. Where it needs it, the
+first ``--fallback`` of those scenes are solved again with the fallback (in a worker process, ``--fallback-limit``
+seconds at most each). On the first ``--reference`` converged scenes the relaxation solver
+(``moor_env/physics/statics_relaxation.py``) runs too, and on the first ``--moorpy`` scenes MoorPy
+(``benchmarks/_moorpy_scene.py``, a benchmark-only dependency): release point and top tensions are compared.
 
-    python benchmarks/statics.py [--scenes 1000] [--reference 24] [--seed 0]
+    python benchmarks/statics.py [--scenes 1000] [--fallback 6] [--reference 6] [--moorpy 40] [--seed 0]
 
 Writes ``benchmarks/results/statics.json``, ``docs/statics-times.png`` and the tables of ``docs/statics.md`` and
 the README's statics block; ``--docs-only`` rewrites the tables from the JSON.
@@ -18,6 +21,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import multiprocessing
 import os
 import sys
 import time
@@ -68,7 +72,8 @@ def _warm_up() -> None:
 
 
 def run_scene(overrides: dict, reference: bool) -> dict:
-    """Solve one scene; the record of times, outcome and (with ``reference``) the reference solver's answers."""
+    """Solve one scene by Newton's method; the record of times, outcome and (with ``reference``) the relaxation
+    solver's answers."""
     record: dict = {"scene": overrides}
     t0 = time.perf_counter()
     try:
@@ -80,15 +85,14 @@ def run_scene(overrides: dict, reference: bool) -> dict:
     record["nodes"] = int(model.node_i.shape[0])
     t0 = time.perf_counter()
     try:
-        result = solve_statics(model, progress=False)
+        result = solve_statics(model, progress=False, fallback=False)
     except NoEquilibrium as exc:
         record.update(outcome="no equilibrium", cause=exc.cause, solve_s=time.perf_counter() - t0)
         return record
     except (StaticsNotConverged, SimulationDiverged) as exc:
-        record.update(outcome="failed", cause=str(exc), solve_s=time.perf_counter() - t0)
+        record.update(outcome="needs the fallback", cause=str(exc), solve_s=time.perf_counter() - t0)
         return record
     record.update(outcome="converged", solve_s=time.perf_counter() - t0, iterations=result.iterations,
-                  method=result.method,
                   release_point_m=result.release_point_m, top_tensions_n=result.top_tensions_n)
     if reference:
         try:
@@ -97,6 +101,46 @@ def run_scene(overrides: dict, reference: bool) -> dict:
         except StaticsNotConverged as exc:
             record["reference"] = {"failed": str(exc)}
     return record
+
+
+def _fallback_worker(overrides: dict, queue) -> None:
+    t0 = time.perf_counter()
+    try:
+        result = solve_statics(load_scene("gjoa-500", overrides), progress=False)
+        queue.put({"converged": True, "method": result.method, "solve_s": time.perf_counter() - t0})
+    except Exception as exc:  # noqa: BLE001  (any failure of the fallback is a result here)
+        queue.put({"converged": False, "cause": f"{type(exc).__name__}: {exc}", "solve_s": time.perf_counter() - t0})
+
+
+def run_fallback(overrides: dict, limit_s: float) -> dict:
+    """The full solve (Newton, then the fallback) of one scene in a worker process, stopped after ``limit_s``."""
+    queue = multiprocessing.Queue()
+    worker = multiprocessing.Process(target=_fallback_worker, args=(overrides, queue))
+    worker.start()
+    worker.join(limit_s)
+    if worker.is_alive():
+        worker.terminate()
+        worker.join()
+        return {"converged": False, "cause": f"not finished within {limit_s:g} s", "solve_s": limit_s}
+    return queue.get() if not queue.empty() else {"converged": False, "cause": "worker ended without a result"}
+
+
+def run_moorpy(records: list[dict], count: int) -> list[dict]:
+    """MoorPy on the first ``count`` scenes our solver converged on: its answer beside ours."""
+    from _moorpy_scene import moorpy_statics  # noqa: PLC0415  (MoorPy is a benchmark-only dependency)
+
+    rows = []
+    for r in [r for r in records if r["outcome"] == "converged"][:count]:
+        mp = moorpy_statics(r["scene"])
+        row = {"scene": r["scene"], "ours_s": r["solve_s"], "current": r["scene"]["current_scale"] > 0.0,
+               "moorpy_failed": mp["failed"], "moorpy_s": mp.get("seconds"),
+               "moorpy_one_s": mp.get("solve_seconds_one")}
+        if not mp["failed"]:
+            row["release_point_m"] = float(np.linalg.norm(np.subtract(mp["release_point_m"], r["release_point_m"])))
+            row["top_tension_rel"] = {k: mp["top_tensions_n"][k] / r["top_tensions_n"][k] - 1.0
+                                      for k in r["top_tensions_n"]}
+        rows.append(row)
+    return rows
 
 
 def summarize(records: list[dict]) -> dict:
@@ -112,15 +156,14 @@ def summarize(records: list[dict]) -> dict:
             "converged": len(done),
             "no_equilibrium": sum(r["outcome"] == "no equilibrium" for r in rows),
             "refused_by_config": sum(r["outcome"] == "refused by the config" for r in rows),
-            "failed": sum(r["outcome"] == "failed" for r in rows),
+            "needs_fallback": sum(r["outcome"] == "needs the fallback" for r in rows),
             "solve_ms": _quantiles(solve),
             "with_compile_ms": _quantiles(total),
             "iterations_median": float(np.median([r["iterations"] for r in done])) if done else None,
-            "fallback": sum(r.get("method") == "relaxation" for r in done),
         }
     causes: dict = {}
     for r in records:
-        if r["outcome"] in ("no equilibrium", "failed"):
+        if r["outcome"] in ("no equilibrium", "needs the fallback"):
             key = f"{r['outcome']}: {r['cause'].split(':')[0][:60]}"
             causes[key] = causes.get(key, 0) + 1
     out["causes"] = causes
@@ -150,6 +193,27 @@ def _compare(records: list[dict]) -> dict:
             "reference_solve_median_s": float(np.median([r["reference"]["solve_s"] for r in rows]))}
 
 
+def summarize_extras(fallbacks: list[dict], moorpy: list[dict]) -> dict:
+    """The fallback sample and the MoorPy comparison in numbers."""
+    out: dict = {"fallback": {"scenes": len(fallbacks), "converged": sum(f["converged"] for f in fallbacks),
+                              "solve_s": [round(f["solve_s"], 2) for f in fallbacks]}}
+    ok = [m for m in moorpy if not m["moorpy_failed"]]
+    calm = [m for m in ok if not m["current"]]
+    out["moorpy"] = {
+        "scenes": len(moorpy), "failed": len(moorpy) - len(ok),
+        "failed_in_current": sum(bool(m["moorpy_failed"]) and m["current"] for m in moorpy),
+        "calm_scenes": len(calm),
+        "calm_release_point_max_m": max((m["release_point_m"] for m in calm), default=math.nan),
+        "calm_mooring_tension_max_rel": max((abs(m["top_tension_rel"]["mooring_line"]) for m in calm),
+                                            default=math.nan),
+        "current_release_point_max_m": max((m["release_point_m"] for m in ok if m["current"]), default=math.nan),
+        "ours_median_ms": float(np.median([m["ours_s"] for m in ok]) * 1e3) if ok else math.nan,
+        "moorpy_median_ms": float(np.median([m["moorpy_s"] for m in ok]) * 1e3) if ok else math.nan,
+        "moorpy_one_solve_median_ms": float(np.median([m["moorpy_one_s"] for m in ok]) * 1e3) if ok else math.nan,
+    }
+    return out
+
+
 def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
     """The markdown of docs/statics.md and of the README's statics block."""
     s = result["summary"]
@@ -157,30 +221,44 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
     for preset in (*PRESETS, "all"):
         p = s[preset]
         q, c = p["solve_ms"], p["with_compile_ms"]
-        rows.append([preset, p["scenes"], p["converged"], p["fallback"], p["no_equilibrium"], p["refused_by_config"],
-                     p["failed"],
-                     *(f"{q.get(k, math.nan):.1f}" for k in ("median", "p90", "p99", "max")),
-                     f"{c.get('median', math.nan):.1f}", f"{p['iterations_median']:.0f}"
-                     if p["iterations_median"] is not None else "-"])
-    main = table(["preset", "scenes", "converged", "of them by the fallback", "no equilibrium", "refused by config",
-                  "failed", "median ms",
-                  "p90 ms", "p99 ms", "max ms", "median ms with compile", "median iterations"], rows)
+        rows.append([preset, p["scenes"], p["converged"], p["needs_fallback"], p["no_equilibrium"],
+                     p["refused_by_config"], *(f"{q.get(k, math.nan):.1f}" for k in ("median", "p90", "p99", "max")),
+                     f"{c.get('median', math.nan):.1f}",
+                     f"{p['iterations_median']:.0f}" if p["iterations_median"] is not None else "-"])
+    main = table(["preset", "scenes", "Newton converged", "needs the fallback", "no equilibrium", "refused by config",
+                  "median ms", "p90 ms", "p99 ms", "max ms", "median ms with compile", "median iterations"], rows)
     ref = s["reference"]
     causes = "\n".join(f"- {k}: {v}" for k, v in sorted(s["causes"].items())) or "- none"
-    cmp_text = (f"Against the reference solver on {ref['scenes']} of these scenes: release point within "
-                f"{ref['release_point_max_m'] * 100:.2g} cm, "
-                f"top tensions within {ref['top_tension_max_rel'] * 100:.2g} %; "
-                f"the reference took {ref['reference_solve_median_s']:.2g} s per scene (median), "
-                f"{ref['speedup_median']:.0f}x the Newton solver's time (least {ref['speedup_min']:.0f}x)."
-                if ref.get("scenes") else "No reference comparison in this run.")
+    cmp_text = (f"Against the relaxation solver on {ref['scenes']} of the converged scenes: release point within "
+                f"{ref['release_point_max_m'] * 100:.2g} cm, top tensions within "
+                f"{ref['top_tension_max_rel'] * 100:.2g} %; it took {ref['reference_solve_median_s']:.2g} s per scene "
+                f"(median), {ref['speedup_median']:.0f}x the Newton solver's time (least {ref['speedup_min']:.0f}x)."
+                if ref.get("scenes") else "No relaxation-solver comparison in this run.")
+    fb = s["fallback"]
+    times = ", ".join(f"{t:g}" for t in fb["solve_s"])
+    fb_text = (f"The fallback on the first {fb['scenes']} scenes that need it: {fb['converged']} converged, in "
+               f"{times} s." if fb["scenes"] else "No scene needed the fallback.")
+    mp = s["moorpy"]
+    mp_text = (f"MoorPy 1.3 on the first {mp['scenes']} converged scenes: it failed on {mp['failed']} "
+               f"({mp['failed_in_current']} of them in current: it lifts a suspended line's seabed there). In calm "
+               f"water ({mp['calm_scenes']} scenes) its release point is within {mp['calm_release_point_max_m']:.2g} m "
+               f"and its mooring-line top tension within {mp['calm_mooring_tension_max_rel'] * 100:.2g} % of ours; "
+               f"in current it differs by up to {mp['current_release_point_max_m']:.2g} m (it takes one uniform "
+               f"current). Median time per scene: ours {mp['ours_median_ms']:.1f} ms, MoorPy "
+               f"{mp['moorpy_median_ms']:.0f} ms with its wire-length search "
+               f"({mp['moorpy_one_solve_median_ms']:.0f} ms "
+               f"for one equilibrium solve), in the same process."
+               if mp.get("scenes") else "No MoorPy comparison in this run.")
     line = run_line(result, COMMAND)
-    doc = f"{main}\n\nScenes refused or failed, by cause:\n\n{causes}\n\n{cmp_text}\n\n{line}"
+    doc = (f"{main}\n\nScenes refused or needing the fallback, by cause:\n\n{causes}\n\n{fb_text}\n\n"
+           f"{cmp_text}\n\n{mp_text}\n\n{line}")
     a = s["all"]
-    readme = (f"Hanging equilibrium from any geometry in {a['solve_ms']['median']:.1f} ms median, "
-              f"{a['solve_ms']['p99']:.0f} ms p99 from a compiled scene "
-              f"({a['converged']} of {a['scenes']} drawn scenes "
-              f"converged, {a['no_equilibrium']} refused as having none, {a['failed']} failed; "
-              f"`{COMMAND}`, {result['date'][:10]}; details in [docs/statics.md](docs/statics.md)).")
+    readme = (f"Hanging equilibrium by Newton's method in {a['solve_ms']['median']:.1f} ms median, "
+              f"{a['solve_ms']['p99']:.0f} ms p99 from a compiled scene; "
+              f"{a['converged']} of {a['scenes']} drawn scenes "
+              f"converge, {a['no_equilibrium'] + a['refused_by_config']} are refused as having none, "
+              f"{a['needs_fallback']} need the slow fallback (`{COMMAND}`, {result['date'][:10]}; "
+              f"[docs/statics.md](docs/statics.md)).")
     return [(DOC, "statics", doc), (README, "statics", readme)]
 
 
@@ -209,7 +287,10 @@ def plot(records: list[dict]) -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenes", type=int, default=1000)
-    parser.add_argument("--reference", type=int, default=24, help="scenes also solved by the reference solver")
+    parser.add_argument("--fallback", type=int, default=6, help="scenes needing the fallback solved with it")
+    parser.add_argument("--fallback-limit", type=float, default=300.0, help="seconds per fallback solve at most")
+    parser.add_argument("--reference", type=int, default=6, help="converged scenes also solved by relaxation")
+    parser.add_argument("--moorpy", type=int, default=40, help="converged scenes also solved by MoorPy")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--docs-only", action="store_true", help="rewrite the docs tables from the JSON")
     args = parser.parse_args(argv)
@@ -220,12 +301,20 @@ def main(argv: list[str] | None = None) -> int:
     _warm_up()
     rng = np.random.default_rng(args.seed)
     scenes = [draw_scene(rng) for _ in range(args.scenes)]
-    records = [run_scene(s, i < args.reference) for i, s in enumerate(tqdm(scenes, desc="statics scenes"))]
-    result = {**run_record(load), "seed": args.seed, "summary": summarize(records), "records": records}
+    records = []
+    for scene in tqdm(scenes, desc="statics scenes"):
+        converged = sum(r["outcome"] == "converged" for r in records)
+        records.append(run_scene(scene, converged < args.reference))
+    needing = [r["scene"] for r in records if r["outcome"] == "needs the fallback"][:args.fallback]
+    fallbacks = [run_fallback(s, args.fallback_limit) for s in tqdm(needing, desc="fallback")]
+    moorpy = run_moorpy(records, args.moorpy) if args.moorpy else []
+    summary = {**summarize(records), **summarize_extras(fallbacks, moorpy)}
+    result = {**run_record(load), "seed": args.seed, "summary": summary, "records": records,
+              "fallback_records": fallbacks, "moorpy_records": moorpy}
     RESULT.write_text(json.dumps(result, indent=1))
     plot(records)
     write_blocks(docs_blocks(result))
-    print(json.dumps(result["summary"], indent=1))
+    print(json.dumps(summary, indent=1))
     return 0
 
 

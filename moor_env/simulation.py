@@ -426,12 +426,14 @@ def _adjust_to_drop_height(sim: Simulator, target_z: float) -> float:
     return float(tip[2] - target_z)
 
 
-def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: bool = True) -> StaticResult:
+def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: bool = True,
+                  fallback: bool = True) -> StaticResult:
     """Hanging equilibrium before release (seed 003 Model 1), drop height held at its set value.
 
     For an installation scene with a wire, the wire's unstretched length is corrected (at its top) until the
     anchor tip hangs ``drop_height_m`` above the seabed within ``tol_m``; without a wire, the held chain top
-    is moved instead.
+    is moved instead. ``fallback``: where Newton's method does not converge, finish with the slow relaxation
+    solver (otherwise raise).
 
     Raises
     ------
@@ -442,7 +444,7 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: boo
     t0 = time.perf_counter()
     model = scene if isinstance(scene, Model) else compile_scene(scene)
     sim = Simulator(model)
-    report = solve_equilibrium(sim, progress=progress)
+    report = solve_equilibrium(sim, progress=progress, fallback=fallback)
     iterations = report.iterations
     method = report.method
     sc = model.scene
@@ -456,7 +458,7 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: boo
                 change_line_length(sim.state, model.lines["wire"].index, err)
             else:
                 sim.state.node_pos[model.release_node, 2] -= err
-            warm = solve_equilibrium(sim, warm=True, progress=progress)
+            warm = solve_equilibrium(sim, warm=True, progress=progress, fallback=fallback)
             iterations += warm.iterations
             method = "relaxation" if warm.method == "relaxation" else method
         check_fibre_clearance(sim)

@@ -33,6 +33,7 @@ import time
 import numpy as np
 from tqdm.auto import tqdm
 
+from moor_env.compile import VESSEL_SECOND
 from moor_env.errors import SimulationDiverged, StaticsNotConverged
 from moor_env.physics import layout as L
 from moor_env.physics import statics_relaxation
@@ -42,7 +43,7 @@ from moor_env.physics.environment import current_velocity
 from moor_env.physics.hydro import slender_drag_dq
 from moor_env.physics.integrate import INTEGRATOR_IMPLICIT_EULER, compute_loads, set_constrained_nodes
 from moor_env.physics.line import segment_axis
-from moor_env.physics.statics_guess import first_guess
+from moor_env.physics.statics_guess import first_guess, suspending_offset_m
 from moor_env.physics.statics_relaxation import StaticsReport
 from moor_env.physics.tree import OR_EFF, OR_ORDER, TR_DEG, TR_NB, TR_SEG, build_tree, order
 
@@ -537,7 +538,8 @@ def n_static_dofs(sim) -> int:
 
 
 CHUNK_ITERATIONS = 25
-CURRENT_STEPS = 1  # current is applied in this many equal steps after the calm equilibrium
+VESSEL_STEPS = 12  # a line resting on the seabed is solved first with the second vessel where it hangs clear, then
+# with the vessel brought back in this many steps (the touchdown moves along the line gradually)
 NEWTON_BEFORE_RELAXATION = 12  # Newton iterations from the guess before relaxing instead
 NEWTON_AFTER_RELAXATION = 25
 RELAXATION_S = 20.0  # pseudo time of one relaxation round
@@ -595,6 +597,30 @@ def _stop(st) -> None:
     st.body_state[L.BS_OMEGA:L.BS_OMEGA + 3] = 0.0
 
 
+def _stages(warm: bool, current: float, offset_m: float) -> list[tuple[float, float]]:
+    """(current scale, second vessel's extra distance [m]) of each continuation stage: the calm equilibrium first,
+    then the current; where the line starts clear of the seabed, the vessel moves back in ``VESSEL_STEPS``."""
+    if warm:
+        return [(current, 0.0)]
+    stages = [(0.0, offset_m)]
+    if offset_m > 0.0:
+        stages += [(current * k / VESSEL_STEPS, offset_m * (1.0 - k / VESSEL_STEPS))
+                   for k in range(1, VESSEL_STEPS + 1)]
+    elif current > 0.0:
+        stages.append((current, 0.0))
+    return stages
+
+
+def _move_second_vessel(sim, mean_m: np.ndarray, away_m: float) -> None:
+    """Put the second vessel ``away_m`` further from the installation vessel than ``mean_m`` (its mean position)."""
+    u = mean_m[:2] - sim.vessel_mean_m[0, :2]
+    norm = float(np.hypot(*u))
+    u = u / norm if norm > 1e-9 else np.array([1.0, 0.0])
+    sim.vessel_mean_m[VESSEL_SECOND] = mean_m
+    sim.vessel_mean_m[VESSEL_SECOND, :2] += away_m * u
+    sim.set_vessel_motion(0.0, 1.0, np.zeros(sim.vessel_mean_m.shape[0]))
+
+
 def _run_chunk(sim, ctl: np.ndarray, max_iter: int, tol_rel: float, best: tuple[np.ndarray, np.ndarray]) -> int:
     """Up to ``CHUNK_ITERATIONS`` Newton iterations of the simulator's state to ``tol_rel`` (``best``: scratch for
     the best state so far)."""
@@ -607,10 +633,12 @@ def _run_chunk(sim, ctl: np.ndarray, max_iter: int, tol_rel: float, best: tuple[
                           w.body_load, w.body_acc, w.pos0, w.vel0, best[0], best[1])
 
 
-def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 150, max_step_m: float = 20.0,
-                      warm: bool = False, analytic_guess: bool = True, progress: bool = True) -> StaticsReport:
+def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 400, max_step_m: float = 20.0,
+                      warm: bool = False, analytic_guess: bool = True, progress: bool = True,
+                      fallback: bool = True) -> StaticsReport:
     """Drive the simulator's current state to static equilibrium in place: :func:`solve_newton`, and where it
-    does not converge the slow, robust solver of ``physics/statics_relaxation.py`` from the same start.
+    does not converge (``fallback``) the slow, robust solver of ``physics/statics_relaxation.py`` from the same
+    start.
 
     Parameters and exceptions as :func:`solve_newton`; the report's ``method`` says which solver finished.
     """
@@ -618,6 +646,8 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 150, max_step_
     try:
         return solve_newton(sim, tol_rel, max_iter, max_step_m, warm, analytic_guess, progress)
     except (StaticsNotConverged, SimulationDiverged):
+        if not fallback:
+            raise
         _restore(sim.state, start)
         sim.state.t = start.t
         with tqdm(desc="statics (relaxation)", unit="s relaxed", disable=not progress, leave=False,
@@ -626,7 +656,7 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 150, max_step_
                                                         analytic_guess=analytic_guess, tick=bar.update)
 
 
-def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = 150, max_step_m: float = 20.0,
+def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = 400, max_step_m: float = 20.0,
                       warm: bool = False, analytic_guess: bool = True, progress: bool = True) -> StaticsReport:
     """Drive the simulator's current state to static equilibrium in place.
 
@@ -658,8 +688,7 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = 150, max_step_m: fl
     n_dofs = n_static_dofs(sim)
     if n_dofs == 0:  # nothing to solve (e.g. an anchor held at its drop height, no lines)
         return StaticsReport(0, 0.0, 0.0, 0, "newton")
-    if analytic_guess and not warm:
-        first_guess(sim)
+    mode = first_guess(sim) if analytic_guess and not warm else 0
     ctl = np.zeros(N_CTL)
     ctl[C_TAU] = 1e3 if warm else TAU_START_S
     ctl[C_SMOOTHING] = SMOOTHING_FINAL if warm else SMOOTHING_START
@@ -668,17 +697,27 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = 150, max_step_m: fl
     ctl[C_LAST_STEP] = math.inf
     best = (np.empty_like(sim.state.node_pos), np.empty(L.N_BODY_STATE))
     current = float(sim.env_f[L.EF_CUR_SCALE])
-    ramp = [current] if warm or current == 0.0 else [current * k / CURRENT_STEPS for k in range(CURRENT_STEPS + 1)]
+    second = sim.vessel_mean_m[VESSEL_SECOND].copy() if sim.vessel_mean_m.shape[0] > VESSEL_SECOND else None
+    offset = suspending_offset_m(sim) if mode != 0 and second is not None else 0.0
+    if offset > 0.0:  # start with the second vessel where the line hangs clear of the seabed
+        _move_second_vessel(sim, second, offset)
+        first_guess(sim)
+    stages = _stages(warm, current, offset)
     t0 = time.perf_counter()
     bar = None
     try:
-        for stage, scale in enumerate(ramp):
+        for stage, (scale, away) in enumerate(stages):
             sim.env_f[L.EF_CUR_SCALE] = scale
-            last = stage == len(ramp) - 1
+            if second is not None and offset > 0.0:
+                _move_second_vessel(sim, second, away)
+            last = stage == len(stages) - 1
             ctl[C_STATUS] = STATUS_RUNNING
             ctl[C_BEST] = 0.0
-            if stage > 0:  # each current step starts near the last equilibrium: Newton on the final law
+            if stage > 0:  # each stage starts near the last equilibrium, on the smoothed laws again
                 ctl[C_TAU] = max(ctl[C_TAU], 1e3)
+                ctl[C_SMOOTHING] = SMOOTHING_START
+                ctl[C_PHASE_IT] = 0.0
+                ctl[C_LAST_STEP] = math.inf
             budget = NEWTON_BEFORE_RELAXATION
             while ctl[C_ITERATIONS] < max_iter:
                 status = _run_chunk(sim, ctl, min(max_iter, int(ctl[C_ITERATIONS]) + budget),
@@ -704,6 +743,8 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = 150, max_step_m: fl
                 break
     finally:
         sim.env_f[L.EF_CUR_SCALE] = current
+        if second is not None and offset > 0.0:
+            _move_second_vessel(sim, second, 0.0)
         if bar is not None:
             bar.close()
         _stop(sim.state)

@@ -52,8 +52,9 @@ def _interior_nodes(sim, name: str) -> np.ndarray:
     return st.line_i[idx, L.LI_NODE_START] + np.arange(st.line_i[idx, L.LI_NSEG] - 1)
 
 
-def _hang(sim, name: str, a: np.ndarray, b: np.ndarray, place: bool) -> tuple[float, float, float]:
-    """Hang a line from point a (its bottom end) to b; returns (H, V_A, top tension) [N] and, with ``place``,
+def _hang(sim, name: str, a: np.ndarray, b: np.ndarray, place: bool) -> tuple[float, float, float, int]:
+    """Hang a line from point a (its bottom end) to b; returns (H, V_A, top tension) [N] and the shape's mode
+    (``catenary.hang_line``: 0 suspended, 1 grounded, 2 folded on the seabed) and, with ``place``,
     puts its interior nodes on the shape: the discrete model's own equilibrium where the line hangs free (its
     segments are chords, shorter than the arcs of a tightly curved catenary), the continuous catenary where it
     touches the seabed."""
@@ -80,7 +81,7 @@ def _hang(sim, name: str, a: np.ndarray, b: np.ndarray, place: bool) -> tuple[fl
         pos[nodes, 1] = a[1] + u[1] * out[:, 0]
         pos[nodes, 2] = a[2] + out[:, 1]
     top = math.hypot(h, v_a + float(np.sum(sec_w * sec_len)))
-    return h, v_a, top
+    return h, v_a, top, mode
 
 
 def _discrete_suspended_parts(sim, name: str, out: np.ndarray, h: float, dx: float, dz: float,
@@ -152,8 +153,9 @@ def _hang_vertical(sim, name: str, bottom: np.ndarray, bottom_force_n: float) ->
     return walk(0.0, bottom_force_n, sec_w, sec_ea, sec_len, 0.0, float(np.sum(sec_len)))[1]
 
 
-def first_guess(sim) -> None:
-    """Set the simulator's node positions and anchor pose to the elastic-catenary estimate of the equilibrium.
+def first_guess(sim) -> int:
+    """Set the simulator's node positions and anchor pose to the elastic-catenary estimate of the equilibrium;
+    returns the mooring line's shape mode (0 suspended, 1 grounded, 2 folded; 0 without one).
 
     Raises
     ------
@@ -167,10 +169,11 @@ def first_guess(sim) -> None:
         _hang(sim, "line", st.node_pos[st.line_i[line, L.LI_BOTTOM]].copy(),
               st.node_pos[st.line_i[line, L.LI_TOP]].copy(), place=True)
     elif sim.model.release_node >= 0:
-        _guess_installation(sim)
+        return _guess_installation(sim)
+    return 0
 
 
-def _guess_installation(sim) -> None:
+def _guess_installation(sim) -> int:
     st, m = sim.state, sim.model
     sc = m.scene
     g = sim.env_f[L.EF_G]
@@ -190,8 +193,9 @@ def _guess_installation(sim) -> None:
         if "mooring_line" in m.lines:
             _check_mooring_line(sim, release)
     st.node_pos[m.release_node] = release
+    mode = 0
     if "mooring_line" in m.lines:
-        _hang(sim, "mooring_line", release, _top(sim, "mooring_line"), place=True)
+        mode = _hang(sim, "mooring_line", release, _top(sim, "mooring_line"), place=True)[3]
     back = release - np.array([0.0, 0.0, vc_rise])
     _hang_vertical(sim, "vertical_chain", back, anchor_weight)
     b = st.body_state
@@ -200,6 +204,7 @@ def _guess_installation(sim) -> None:
     b[L.BS_VEL: L.BS_VEL + 3] = 0.0
     b[L.BS_OMEGA: L.BS_OMEGA + 3] = 0.0
     set_constrained_nodes(st.t, st.node_pos, st.node_vel, st.body_state, st.node_i, st.node_f, sim.tracks, sim.env_f)
+    return mode
 
 
 def _top(sim, name: str) -> np.ndarray:
@@ -209,7 +214,7 @@ def _top(sim, name: str) -> np.ndarray:
 
 def _check_mooring_line(sim, release: np.ndarray) -> tuple[float, float]:
     """(H, V_A) of the mooring line hung from ``release``; refuses a line that would exceed its MBL."""
-    h, v_a, top = _hang(sim, "mooring_line", release, _top(sim, "mooring_line"), place=False)
+    h, v_a, top, _ = _hang(sim, "mooring_line", release, _top(sim, "mooring_line"), place=False)
     _, _, _, sec_mat, _ = line_arrays(sim, "mooring_line")
     mbl = float(np.min(sim.model.mat_f[sec_mat, L.MF_MBL]))
     if max(top, math.hypot(h, v_a)) > mbl:
@@ -295,3 +300,23 @@ def check_fibre_clearance(sim) -> None:
         raise NoEquilibrium("installation.mooring_line_length_m", inst.mooring_line_length_m,
                             "a shorter line or a larger vessel_spacing_m",
                             "the fibre rope would rest on the seabed")
+
+
+def suspending_offset_m(sim, margin_m: float = 5.0, steps: int = 40) -> float:
+    """How much further the second vessel would have to stand from the release point for the mooring line to hang
+    clear of the seabed (by ``margin_m``) [m]; 0 where it already does."""
+    release = sim.state.node_pos[sim.model.release_node].copy()
+    top = _top(sim, "mooring_line")
+    horizontal = top[:2] - release[:2]
+    dx = float(np.hypot(*horizontal))
+    u = horizontal / dx if dx > 1e-9 else np.array([1.0, 0.0])
+    total = float(np.sum(line_arrays(sim, "mooring_line")[2]))
+    for k in range(steps + 1):
+        offset = k * total / steps
+        b = top.copy()
+        b[:2] = release[:2] + u * (dx + offset)
+        lifted = release.copy()
+        lifted[2] += margin_m  # the seabed margin: as if the seabed were margin_m higher
+        if _hang(sim, "mooring_line", lifted, b + [0.0, 0.0, margin_m], place=False)[3] == 0:
+            return offset
+    return total
