@@ -8,7 +8,6 @@ import os
 
 import pytest
 
-import moor_env.simulation
 from moor_env import cli
 from moor_env.config import SET_SHORTCUTS, bundled_scene_names
 
@@ -22,8 +21,8 @@ def _fail_if_called(*args, **kwargs):
 @pytest.fixture
 def no_run(monkeypatch):
     """Any statics or drop started by the CLI fails the test."""
-    monkeypatch.setattr(moor_env.simulation, "solve_statics", _fail_if_called)
-    monkeypatch.setattr(moor_env.simulation, "simulate_drop", _fail_if_called)
+    monkeypatch.setattr(cli, "solve_statics", _fail_if_called)
+    monkeypatch.setattr(cli, "simulate_drop", _fail_if_called)
 
 
 def _error_line(capsys, argv: list[str]) -> str:
@@ -147,7 +146,7 @@ class _FakeResult:
 
 def test_human_output_is_rounded_and_json_keeps_full_precision(capsys, monkeypatch):
     calls = []
-    monkeypatch.setattr(moor_env.simulation, "simulate_drop", lambda scene, **kw: calls.append(kw) or _FakeResult())
+    monkeypatch.setattr(cli, "simulate_drop", lambda scene, **kw: calls.append(kw) or _FakeResult())
     assert cli.main(["drop", "gjoa-500"]) == 0
     out = {line.split(None, 1)[0]: line.split(None, 1)[1] for line in capsys.readouterr().out.splitlines()}
     assert out == {"status": "touchdown", "touchdown_time_s": "7.123", "touchdown_speed_m_s": "19.88",
@@ -160,7 +159,7 @@ def test_human_output_is_rounded_and_json_keeps_full_precision(capsys, monkeypat
 
 def test_drop_shows_progress_unless_asked_not_to(capsys, monkeypatch):
     calls = []
-    monkeypatch.setattr(moor_env.simulation, "simulate_drop", lambda scene, **kw: calls.append(kw) or _FakeResult())
+    monkeypatch.setattr(cli, "simulate_drop", lambda scene, **kw: calls.append(kw) or _FakeResult())
     assert cli.main(["drop", "gjoa-500"]) == 0
     assert cli.main(["drop", "gjoa-500", "--no-progress"]) == 0
     assert [c["progress"] for c in calls] == [True, False]
