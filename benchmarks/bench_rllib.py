@@ -9,10 +9,7 @@ steps/s and episodes/s over the iterations' wall time, sampling and learning tog
 env stepped in this process with uniform random actions after a few untimed episodes (PPO's initial Gaussian
 policy also releases on about half of the steps, so episodes are comparably short).
 
-Every new discrete scenario combination first solves its hanging equilibrium (a one-off cost, cached on disk,
-seconds to minutes each on a loaded machine), so a throughput figure should fix the equilibrium fields with
-``--set env.overrides.scenario.<field>=<value>`` (the docs' figure does) or precompute the grid
-(``python -m moor_env.envs.precompute``). Writes ``benchmarks/results/bench_rllib.json`` with the machine, the
+Every reset solves its hanging equilibrium (milliseconds, part of the measured throughput). Writes ``benchmarks/results/bench_rllib.json`` with the machine, the
 load averages and the versions, and the table in ``docs/rllib.md`` from ``bench_rllib*.json`` (``--docs-only``:
 only the table, from the committed JSON).
 """

@@ -8,8 +8,8 @@ Each episode draws its scenario from the default config (seeds 5000, 5001, ...),
 once with Hs 0, and is driven by the seeded random controls of ``benchmarks/pre_release_step.py`` (spacing and
 winch rates redrawn every 10 s, release at a random step between 25 and 55). Counted: touchdowns, episodes that
 ended otherwise (with their status), and fallbacks (pre-release advances repeated at the scene's step after a
-blow-up with the coarse pre-release step). The first episodes of a fresh cache solve their equilibria, so the
-CPU figures are not episode costs (``benchmarks/bench_env.py`` measures those).
+blow-up with the coarse pre-release step). The CPU figures include the reset's static solves; episode costs are
+measured by ``benchmarks/bench_env.py``.
 """
 
 from __future__ import annotations
