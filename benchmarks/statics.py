@@ -37,8 +37,7 @@ from _machine import run_record  # noqa: E402
 from moor_env import load_scene  # noqa: E402
 from moor_env.compile import compile_scene  # noqa: E402
 from moor_env.errors import ConfigError, NoEquilibrium, SimulationDiverged, StaticsNotConverged  # noqa: E402
-from moor_env.physics.statics_relaxation import solve as reference_solve  # noqa: E402
-from moor_env.simulation import Simulator, solve_statics  # noqa: E402
+from moor_env.simulation import solve_statics  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULT = ROOT / "benchmarks" / "results" / "statics.json"
@@ -85,7 +84,7 @@ def run_scene(overrides: dict, reference: bool) -> dict:
     record["nodes"] = int(model.node_i.shape[0])
     t0 = time.perf_counter()
     try:
-        result = solve_statics(model, progress=False, fallback=False)
+        result = solve_statics(model, progress=False, method="newton")
     except NoEquilibrium as exc:
         record.update(outcome="no equilibrium", cause=exc.cause, solve_s=time.perf_counter() - t0)
         return record
@@ -96,8 +95,9 @@ def run_scene(overrides: dict, reference: bool) -> dict:
                   release_point_m=result.release_point_m, top_tensions_n=result.top_tensions_n)
     if reference:
         try:
-            release, tensions, seconds = reference_solve(Simulator(compile_scene(load_scene("gjoa-500", overrides))))
-            record["reference"] = {"release_point_m": release, "top_tensions_n": tensions, "solve_s": seconds}
+            reference = solve_statics(load_scene("gjoa-500", overrides), progress=False, method="relaxation")
+            record["reference"] = {"release_point_m": reference.release_point_m,
+                                   "top_tensions_n": reference.top_tensions_n, "solve_s": reference.wall_static_s}
         except StaticsNotConverged as exc:
             record["reference"] = {"failed": str(exc)}
     return record

@@ -7,7 +7,6 @@ entry points used by the command line.
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -20,6 +19,7 @@ from moor_env.compile import VESSEL_SECOND, Model, compile_scene, fall_time_step
 from moor_env.config import SceneConfig, load_scene
 from moor_env.errors import SimulationDiverged
 from moor_env.physics import layout as L
+from moor_env.physics.anchor import tilt_deg
 from moor_env.physics.integrate import (
     FAIL_BODY,
     FAIL_NODE,
@@ -275,7 +275,7 @@ class Simulator:
     def tilt_deg(self) -> float:
         """Angle of the anchor axis from vertical (tip down) [deg]."""
         ez = self.state.body_state[L.BS_AXIS + 2]
-        return math.degrees(math.acos(min(1.0, max(-1.0, -ez))))
+        return float(tilt_deg(ez))
 
     def line_past_back_end_m(self, line: str) -> tuple[float, float]:
         """How far ``line`` reaches past the anchor's back end: the largest distance of one of its nodes beyond the
@@ -427,13 +427,13 @@ def _adjust_to_drop_height(sim: Simulator, target_z: float) -> float:
 
 
 def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: bool = True,
-                  fallback: bool = True) -> StaticResult:
+                  method: str = "auto") -> StaticResult:
     """Hanging equilibrium before release (seed 003 Model 1), drop height held at its set value.
 
     For an installation scene with a wire, the wire's unstretched length is corrected (at its top) until the
     anchor tip hangs ``drop_height_m`` above the seabed within ``tol_m``; without a wire, the held chain top
-    is moved instead. ``fallback``: where Newton's method does not converge, finish with the slow relaxation
-    solver (otherwise raise).
+    is moved instead. ``method``: "auto" (Newton's method, and the slow relaxation solver where it does not
+    converge), "newton" or "relaxation" (one of them only; :func:`moor_env.physics.statics.solve_equilibrium`).
 
     Raises
     ------
@@ -444,9 +444,9 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: boo
     t0 = time.perf_counter()
     model = scene if isinstance(scene, Model) else compile_scene(scene)
     sim = Simulator(model)
-    report = solve_equilibrium(sim, progress=progress, fallback=fallback)
+    report = solve_equilibrium(sim, progress=progress, method=method)
     iterations = report.iterations
-    method = report.method
+    finished = report.method
     sc = model.scene
     if sc.kind == "dart_installation" and model.release_node >= 0:
         target = -sc.environment.water_depth_m + sc.installation.drop_height_m
@@ -458,9 +458,9 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: boo
                 change_line_length(sim.state, model.lines["wire"].index, err)
             else:
                 sim.state.node_pos[model.release_node, 2] -= err
-            warm = solve_equilibrium(sim, warm=True, progress=progress, fallback=fallback)
+            warm = solve_equilibrium(sim, warm=True, progress=progress, method=method)
             iterations += warm.iterations
-            method = "relaxation" if warm.method == "relaxation" else method
+            finished = "relaxation" if warm.method == "relaxation" else finished
         check_fibre_clearance(sim)
     sim.state.line_f[:, L.LF_MAX_TENSION] = 0.0
     wall = time.perf_counter() - t0
@@ -475,7 +475,7 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: boo
     wire_len = sim.line_length_m("wire") if "wire" in model.lines else None
     return StaticResult(simulator=sim, release_point_m=release, tip_height_above_seabed_m=tip_h, tilt_deg=tilt,
                         top_tensions_n=sim.top_tensions_n(), wire_length_m=wire_len, iterations=iterations,
-                        wall_static_s=wall, method=method)
+                        wall_static_s=wall, method=finished)
 
 
 # --- drop ----------------------------------------------------------------------------------------------------
@@ -589,7 +589,7 @@ def run_drop(sim: Simulator, wall_static_s: float = 0.0, keep_snapshots: bool = 
         touchdown_time_s=float(td[L.TD_TIME] - sim.release_time_s) if touched else None,
         touchdown_speed_m_s=float(np.linalg.norm(td[L.TD_VEL:L.TD_VEL + 3])) if touched else None,
         touchdown_vertical_speed_m_s=float(-td[L.TD_VEL + 2]) if touched else None,
-        tilt_deg=float(math.degrees(math.acos(min(1.0, -td[L.TD_AXIS + 2])))) if touched else None,
+        tilt_deg=float(tilt_deg(td[L.TD_AXIS + 2])) if touched else None,
         drift_m=float(np.hypot(td[L.TD_TIP] - tip0[0], td[L.TD_TIP + 1] - tip0[1])) if touched else None,
         release_point_m=None if sim.release_point_m is None else [float(v) for v in sim.release_point_m],
         release_time_s=float(sim.release_time_s),

@@ -9,9 +9,9 @@ It is driven to zero by Newton's method with pseudo-transient continuation (swit
     (D / tau^2 + K) dx = F(x),        tau grows as the residual falls,
 
 all in one numba kernel. D holds the node masses and the anchor's inertia; K = -dF/dx is analytic: per segment
-dT/dl q q^T + (T / l) (I - q q^T) (the elastic and geometric stiffness), the seabed's vertical stiffness, and
-for the anchor J^T S J plus the geometric stiffness of its arms (a force f at axial coordinate s resists a tilt
-by s (e . f)). Current drag enters the residual but not K (inexact Newton: the drag's change with the line's
+dT/dl q q^T + (T / l) (I - q q^T) (the elastic and geometric stiffness), the seabed's vertical stiffness
+(``seabed.seabed_stiffness``), and for the anchor J^T S J plus the geometric stiffness of its arms (a force f at
+axial coordinate s resists a tilt by s (e . f)). Current drag enters the residual but not K (inexact Newton: the drag's change with the line's
 angle is small next to the geometric stiffness of a hanging line). The system is solved in O(N) by the block
 tree elimination of ``physics/tree.py``, the anchor's five unknowns (position, two tilt angles) as the root.
 
@@ -42,7 +42,9 @@ from moor_env.physics.anchor import rotate_axis
 from moor_env.physics.environment import current_velocity
 from moor_env.physics.hydro import slender_drag_dq
 from moor_env.physics.integrate import INTEGRATOR_IMPLICIT_EULER, compute_loads, set_constrained_nodes
+from moor_env.physics.linalg3 import inverse3
 from moor_env.physics.line import segment_axis
+from moor_env.physics.seabed import seabed_stiffness
 from moor_env.physics.statics_guess import first_guess, suspending_offset_m
 from moor_env.physics.statics_relaxation import StaticsReport
 from moor_env.physics.tree import OR_EFF, OR_ORDER, TR_DEG, TR_NB, TR_SEG, build_tree, order
@@ -168,19 +170,11 @@ def _assemble(tau, body_node, node_pos, seg_i, seg_f, mat_f, env_f, current_prof
             m = max(node_mass[n], 1e-6) * inv_tau2
             for c in range(3):
                 dmat[n, c, c] = m
-    depth = env_f[L.EF_DEPTH]
-    kbot = env_f[L.EF_KBOT]
-    soft = env_f[L.EF_SEABED_SMOOTHING]
     for n in range(nn):
         e = orow[n, OR_EFF]
         if e < 0 or e == body_node or node_contact[n] <= 0.0:
             continue
-        penetration = -depth - node_pos[n, 2]
-        if soft > 0.0:  # slope of the smoothed contact (physics/seabed.py)
-            slope = 0.5 * (1.0 + penetration / math.sqrt(penetration * penetration + soft * soft))
-            dmat[e, 2, 2] += kbot * node_contact[n] * slope
-        elif penetration >= 0.0:
-            dmat[e, 2, 2] += kbot * node_contact[n]
+        dmat[e, 2, 2] += seabed_stiffness(node_pos[n, 2], node_contact[n], env_f)
     smoothing = env_f[L.EF_SLACK_SMOOTHING]
     rho = env_f[L.EF_RHO]
     kmat = np.empty((3, 3))
@@ -243,30 +237,6 @@ def _assemble(tau, body_node, node_pos, seg_i, seg_f, mat_f, env_f, current_prof
 
 
 @jit_step
-def _inverse3(m, out):
-    """Inverse of a general 3x3 matrix."""
-    c00 = m[1, 1] * m[2, 2] - m[1, 2] * m[2, 1]
-    c01 = m[0, 2] * m[2, 1] - m[0, 1] * m[2, 2]
-    c02 = m[0, 1] * m[1, 2] - m[0, 2] * m[1, 1]
-    c10 = m[1, 2] * m[2, 0] - m[1, 0] * m[2, 2]
-    c11 = m[0, 0] * m[2, 2] - m[0, 2] * m[2, 0]
-    c12 = m[0, 2] * m[1, 0] - m[0, 0] * m[1, 2]
-    c20 = m[1, 0] * m[2, 1] - m[1, 1] * m[2, 0]
-    c21 = m[0, 1] * m[2, 0] - m[0, 0] * m[2, 1]
-    c22 = m[0, 0] * m[1, 1] - m[0, 1] * m[1, 0]
-    inv = 1.0 / (m[0, 0] * c00 + m[0, 1] * c10 + m[0, 2] * c20)
-    out[0, 0] = c00 * inv
-    out[0, 1] = c01 * inv
-    out[0, 2] = c02 * inv
-    out[1, 0] = c10 * inv
-    out[1, 1] = c11 * inv
-    out[1, 2] = c12 * inv
-    out[2, 0] = c20 * inv
-    out[2, 1] = c21 * inv
-    out[2, 2] = c22 * inv
-
-
-@jit_step
 def _solve_body(tau, p, basis, res_body, body_state, node_f, node_force, body_f, smat, rho_p, dq):
     """The anchor's five unknowns from the lines' impedance ``smat`` and right-hand side ``rho_p`` at node p.
 
@@ -312,7 +282,7 @@ def _newton_step(tau, nq, body_node, basis, res_body, dq, node_pos, body_state, 
     kpc_inv = np.empty((3, 3))
     for k in range(nq):
         c = orow[k, OR_ORDER]
-        _inverse3(dmat[c], inv)
+        inverse3(dmat[c], inv)
         dmat[c, :, :] = inv
         node_acc[c, :] = inv @ node_acc[c]
         if tree[c, TR_DEG] != -1:
@@ -633,20 +603,25 @@ def _run_chunk(sim, ctl: np.ndarray, max_iter: int, tol_rel: float, best: tuple[
                           w.body_load, w.body_acc, w.pos0, w.vel0, best[0], best[1])
 
 
+METHODS = ("auto", "newton", "relaxation")
+
+
 def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 400, max_step_m: float = 20.0,
                       warm: bool = False, analytic_guess: bool = True, progress: bool = True,
-                      fallback: bool = True) -> StaticsReport:
-    """Drive the simulator's current state to static equilibrium in place: :func:`solve_newton`, and where it
-    does not converge (``fallback``) the slow, robust solver of ``physics/statics_relaxation.py`` from the same
-    start.
+                      method: str = "auto") -> StaticsReport:
+    """Drive the simulator's current state to static equilibrium in place.
 
-    Parameters and exceptions as :func:`solve_newton`; the report's ``method`` says which solver finished.
+    ``method``: "auto" runs :func:`solve_newton` and, where it does not converge, the slow, robust solver of
+    ``physics/statics_relaxation.py`` from the same start; "newton" and "relaxation" run one of them only.
+    Other parameters and exceptions as :func:`solve_newton`; the report's ``method`` says which solver finished.
     """
     start = sim.state.copy()
     try:
+        if method == "relaxation":
+            raise StaticsNotConverged("the relaxation solver was asked for")
         return solve_newton(sim, tol_rel, max_iter, max_step_m, warm, analytic_guess, progress)
     except (StaticsNotConverged, SimulationDiverged):
-        if not fallback:
+        if method == "newton":
             raise
         _restore(sim.state, start)
         sim.state.t = start.t

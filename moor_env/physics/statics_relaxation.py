@@ -19,7 +19,6 @@ For large tau this is Newton's method and converges quadratically.
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -558,27 +557,3 @@ def _guess_installation(sim) -> None:
     _place_line(sim, "vertical_chain", back, 0.0, anchor_weight)
     b = st.body_state
     b[L.BS_POS: L.BS_POS + 3] = back - m.body_f[L.BF_S_BACK] * b[L.BS_AXIS: L.BS_AXIS + 3]
-
-
-def solve(sim, tol_m: float = 1e-3):
-    """This solver's hanging equilibrium of a simulator's model (drop height held as in
-    ``moor_env.simulation.solve_statics``): (release point [m], top tensions [N], seconds)."""
-    model = sim.model
-    t0 = time.perf_counter()
-    solve_equilibrium(sim)
-    sc = model.scene
-    if sc.kind == "dart_installation" and model.release_node >= 0:
-        target = -sc.environment.water_depth_m + sc.installation.drop_height_m
-        for _ in range(8):
-            tip, _ = sim.tip_state()
-            err = float(tip[2] - target)
-            if abs(err) < tol_m:
-                break
-            if model.wire_end_node >= 0:
-                change_line_length(sim.state, model.lines["wire"].index, err)
-            else:
-                sim.state.node_pos[model.release_node, 2] -= err
-            solve_equilibrium(sim, warm=True)
-    seconds = time.perf_counter() - t0
-    release = sim.state.node_pos[model.release_node].tolist() if model.release_node >= 0 else None
-    return release, sim.top_tensions_n(), seconds
