@@ -6,9 +6,10 @@ Draws scenes from the gjoa-500 installation with depth 300-1500 m, vessel spacin
 model to the result by Newton's method (one core, kernels compiled beforehand, no fallback), and whether it
 converged, was refused as having no equilibrium (with its cause) or needs the fallback. Where it needs it, the
 first ``--fallback`` of those scenes are solved again with the fallback (in a worker process, ``--fallback-limit``
-seconds at most each). On the first ``--reference`` converged scenes the relaxation solver
-(``moor_env/physics/statics_relaxation.py``) runs too, and on the first ``--moorpy`` scenes MoorPy
-(``benchmarks/_moorpy_scene.py``, a benchmark-only dependency): release point and top tensions are compared.
+seconds at most each). On the first ``--reference`` converged scenes of the fast and default presets the
+relaxation solver (``moor_env/physics/statics_relaxation.py``) runs too (same limit), and on the first ``--moorpy``
+converged scenes MoorPy (``benchmarks/_moorpy_scene.py``, a benchmark-only dependency): release point and top
+tensions are compared.
 
     python benchmarks/statics.py [--scenes 1000] [--fallback 6] [--reference 6] [--moorpy 40] [--seed 0]
 
@@ -70,9 +71,8 @@ def _warm_up() -> None:
             solve_statics(load_scene("gjoa-500", {"fidelity": preset, "current_scale": current}), progress=False)
 
 
-def run_scene(overrides: dict, reference: bool) -> dict:
-    """Solve one scene by Newton's method; the record of times, outcome and (with ``reference``) the relaxation
-    solver's answers."""
+def run_scene(overrides: dict) -> dict:
+    """Solve one scene by Newton's method; the record of times and outcome."""
     record: dict = {"scene": overrides}
     t0 = time.perf_counter()
     try:
@@ -93,29 +93,23 @@ def run_scene(overrides: dict, reference: bool) -> dict:
         return record
     record.update(outcome="converged", solve_s=time.perf_counter() - t0, iterations=result.iterations,
                   release_point_m=result.release_point_m, top_tensions_n=result.top_tensions_n)
-    if reference:
-        try:
-            reference = solve_statics(load_scene("gjoa-500", overrides), progress=False, method="relaxation")
-            record["reference"] = {"release_point_m": reference.release_point_m,
-                                   "top_tensions_n": reference.top_tensions_n, "solve_s": reference.wall_static_s}
-        except StaticsNotConverged as exc:
-            record["reference"] = {"failed": str(exc)}
     return record
 
 
-def _fallback_worker(overrides: dict, queue) -> None:
+def _worker(overrides: dict, method: str, queue) -> None:
     t0 = time.perf_counter()
     try:
-        result = solve_statics(load_scene("gjoa-500", overrides), progress=False)
-        queue.put({"converged": True, "method": result.method, "solve_s": time.perf_counter() - t0})
-    except Exception as exc:  # noqa: BLE001  (any failure of the fallback is a result here)
+        result = solve_statics(load_scene("gjoa-500", overrides), progress=False, method=method)
+        queue.put({"converged": True, "method": result.method, "solve_s": time.perf_counter() - t0,
+                   "release_point_m": result.release_point_m, "top_tensions_n": result.top_tensions_n})
+    except Exception as exc:  # noqa: BLE001  (any failure of the solve is a result here)
         queue.put({"converged": False, "cause": f"{type(exc).__name__}: {exc}", "solve_s": time.perf_counter() - t0})
 
 
-def run_fallback(overrides: dict, limit_s: float) -> dict:
-    """The full solve (Newton, then the fallback) of one scene in a worker process, stopped after ``limit_s``."""
+def run_in_worker(overrides: dict, method: str, limit_s: float) -> dict:
+    """``solve_statics(method=method)`` of one scene in a worker process, stopped after ``limit_s``."""
     queue = multiprocessing.Queue()
-    worker = multiprocessing.Process(target=_fallback_worker, args=(overrides, queue))
+    worker = multiprocessing.Process(target=_worker, args=(overrides, method, queue))
     worker.start()
     worker.join(limit_s)
     if worker.is_alive():
@@ -123,6 +117,15 @@ def run_fallback(overrides: dict, limit_s: float) -> dict:
         worker.join()
         return {"converged": False, "cause": f"not finished within {limit_s:g} s", "solve_s": limit_s}
     return queue.get() if not queue.empty() else {"converged": False, "cause": "worker ended without a result"}
+
+
+def run_reference(records: list[dict], count: int, limit_s: float) -> None:
+    """The relaxation solver on the first ``count`` converged scenes of the fast and default presets (the
+    accurate meshes take it minutes), its answer stored in the record."""
+    chosen = [r for r in records if r["outcome"] == "converged" and r["scene"]["fidelity"] != "accurate"][:count]
+    for r in tqdm(chosen, desc="relaxation solver"):
+        ref = run_in_worker(r["scene"], "relaxation", limit_s)
+        r["reference"] = ref if ref["converged"] else {"failed": ref["cause"]}
 
 
 def run_moorpy(records: list[dict], count: int) -> list[dict]:
@@ -179,7 +182,7 @@ def _quantiles(ms: np.ndarray) -> dict:
 
 
 def _compare(records: list[dict]) -> dict:
-    rows = [r for r in records if "reference" in r and "release_point_m" in r.get("reference", {})]
+    rows = [r for r in records if "release_point_m" in r.get("reference", {})]
     if not rows:
         return {"scenes": 0}
     release = [float(np.linalg.norm(np.subtract(r["release_point_m"], r["reference"]["release_point_m"])))
@@ -301,12 +304,10 @@ def main(argv: list[str] | None = None) -> int:
     _warm_up()
     rng = np.random.default_rng(args.seed)
     scenes = [draw_scene(rng) for _ in range(args.scenes)]
-    records = []
-    for scene in tqdm(scenes, desc="statics scenes"):
-        converged = sum(r["outcome"] == "converged" for r in records)
-        records.append(run_scene(scene, converged < args.reference))
+    records = [run_scene(scene) for scene in tqdm(scenes, desc="statics scenes")]
+    run_reference(records, args.reference, args.fallback_limit)
     needing = [r["scene"] for r in records if r["outcome"] == "needs the fallback"][:args.fallback]
-    fallbacks = [run_fallback(s, args.fallback_limit) for s in tqdm(needing, desc="fallback")]
+    fallbacks = [run_in_worker(s, "auto", args.fallback_limit) for s in tqdm(needing, desc="fallback")]
     moorpy = run_moorpy(records, args.moorpy) if args.moorpy else []
     summary = {**summarize(records), **summarize_extras(fallbacks, moorpy)}
     result = {**run_record(load), "seed": args.seed, "summary": summary, "records": records,
