@@ -57,6 +57,7 @@ from moor_env import load_scene, solve_statics  # noqa: E402
 from moor_env.physics import implicit as imp  # noqa: E402
 from moor_env.physics import layout as L  # noqa: E402
 from moor_env.physics._jit import jit  # noqa: E402
+from moor_env.physics.anchor import tilt_deg  # noqa: E402
 
 try:
     from moor_env.physics.integrate import compute_loads  # noqa: E402
@@ -125,7 +126,7 @@ class Case:
         if self.fall:
             td = sim.work.touchdown
             out["touchdown_speed_m_s"] = float(np.linalg.norm(td[L.TD_VEL:L.TD_VEL + 3]))
-            out["touchdown_tilt_deg"] = float(math.degrees(math.acos(min(1.0, -td[L.TD_AXIS + 2]))))
+            out["touchdown_tilt_deg"] = float(tilt_deg(td[L.TD_AXIS + 2]))
         else:
             tip, vel = sim.tip_state()
             out["tip_z_m"] = float(tip[2])

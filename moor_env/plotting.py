@@ -10,6 +10,7 @@ import numpy as np
 
 from moor_env.errors import ConfigError
 from moor_env.physics import layout as L
+from moor_env.physics.anchor import tilt_deg_array
 
 if TYPE_CHECKING:
     from moor_env.simulation import DropResult
@@ -78,7 +79,7 @@ def plot_drop(result: DropResult, path: str | Path, title: str = "") -> Path:
     if hist.shape[0]:
         t = hist[:, L.H_TIME] - result.release_time_s
         speed = np.linalg.norm(hist[:, L.H_TIP_VEL:L.H_TIP_VEL + 3], axis=1)
-        tilt = np.degrees(np.arccos(np.clip(-hist[:, L.H_AXIS + 2], -1.0, 1.0)))
+        tilt = tilt_deg_array(np.ascontiguousarray(hist[:, L.H_AXIS + 2]))
         ax_speed.plot(t, speed, label="tip speed")
         ax_speed.plot(t, -hist[:, L.H_TIP_VEL + 2], "--", label="vertical")
         ax_tilt.plot(t, tilt, color="tab:purple")

@@ -97,6 +97,7 @@ import numpy as np
 from moor_env.config import SceneConfig, load_scene
 from moor_env.errors import SimulationDiverged
 from moor_env.physics import layout as L
+from moor_env.physics.anchor import tilt_deg
 from moor_env.simulation import StaticResult, solve_statics
 
 DEFAULT_DT_FRACTION = 0.7  # fraction of the scheme's stability limit used by the default dt (checked converged)
@@ -599,7 +600,7 @@ def run_moordyn_drop(scene: str | Path | SceneConfig, dt_s: float | None = None,
         result.update(
             touchdown_time_s=float(t_td), touchdown_speed_m_s=float(np.linalg.norm(v_td)),
             touchdown_vertical_speed_m_s=float(-v_td[2]),
-            tilt_deg=float(math.degrees(math.acos(min(1.0, max(-1.0, -e_td[2]))))),
+            tilt_deg=float(tilt_deg(e_td[2])),
             drift_m=float(math.hypot(p_td[0] - tip0[0], p_td[1] - tip0[1])))
     return result
 

@@ -54,6 +54,7 @@ from numba.extending import intrinsic
 
 from moor_env.errors import SimulationDiverged
 from moor_env.physics import layout as L
+from moor_env.physics.anchor import tilt_deg
 from moor_env.physics.environment import current_velocity
 from moor_env.physics.integrate import advance, compute_accelerations
 from moor_env.physics.line import top_tensions
@@ -181,7 +182,7 @@ def measure_scene(t, node_pos, node_vel, body_state, seg_i, seg_f, line_i, body_
     wy = body_state[L.BS_OMEGA + 1]
     wz = body_state[L.BS_OMEGA + 2]
     w_axial = wx * ex + wy * ey + wz * ez
-    out[M_TILT_DEG] = math.degrees(math.acos(min(1.0, max(-1.0, -ez))))
+    out[M_TILT_DEG] = tilt_deg(ez)
     out[M_AXIS_RATE_DEG_S] = math.degrees(math.sqrt((wx - w_axial * ex) ** 2 + (wy - w_axial * ey) ** 2
                                                     + (wz - w_axial * ez) ** 2))
     out[M_HEAVE_M] = out[M_HEAVE_RATE_M_S] = 0.0

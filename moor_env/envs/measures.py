@@ -7,14 +7,13 @@ and the step info are made of them.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from moor_env.compile import VESSEL_INSTALLATION, VESSEL_SECOND
 from moor_env.envs import batch as B
 from moor_env.envs.batch import SlotBuffers, line_summary, measure_scene
 from moor_env.physics import layout as L
+from moor_env.physics.anchor import tilt_deg
 from moor_env.simulation import Simulator
 
 
@@ -76,7 +75,7 @@ def touchdown(sim: Simulator, target_xy: np.ndarray, chain_material: str) -> dic
     td = sim.work.touchdown
     vel = td[L.TD_VEL:L.TD_VEL + 3]
     speed = float(np.linalg.norm(vel))
-    tilt = float(math.degrees(math.acos(min(1.0, max(-1.0, -td[L.TD_AXIS + 2])))))
+    tilt = float(tilt_deg(td[L.TD_AXIS + 2]))
     offset = float(np.hypot(td[L.TD_TIP] - target_xy[0], td[L.TD_TIP + 1] - target_xy[1]))
     pile = float(sim.line_length_on_seabed_m({chain_material}))
     return {"speed_m_s": speed, "vertical_speed_m_s": float(-vel[2]), "tilt_deg": tilt,

@@ -25,6 +25,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from moor_env.physics._jit import jit
 from moor_env.physics.environment import current_velocity
 from moor_env.physics.hydro import slender_drag
@@ -50,6 +52,22 @@ from moor_env.physics.layout import (
     BS_VEL,
     EF_RHO,
 )
+
+
+@jit
+def tilt_deg(ez):
+    """Angle of the anchor axis from vertical, tip down [deg], from the axis' vertical component ``ez``
+    (acos(-e_z); 0 for e = (0, 0, -1))."""
+    return math.degrees(math.acos(min(1.0, max(-1.0, -ez))))
+
+
+@jit
+def tilt_deg_array(ez):
+    """:func:`tilt_deg` of every entry of the 1-D array ``ez``."""
+    out = np.empty(ez.shape[0])
+    for i in range(ez.shape[0]):
+        out[i] = tilt_deg(ez[i])
+    return out
 
 
 @jit

@@ -7,13 +7,21 @@ Drag per unit length on a slender element with unit tangent q and relative veloc
 
 with v_rt = (v_r . q) q and v_rn = v_r - v_rt. Added mass per unit length is
 rho (pi D^2 / 4) [Ca_n (I - q q^T) + Ca_t q q^T].
+
+Derivatives of the drag, beside it (with c_n = 1/2 rho Cd_n D len, c_t = 1/2 rho Cd_t pi D len, v_t = v_r . q):
+
+- with respect to the structure's velocity (:func:`add_slender_drag_dv`, the implicit step's damping):
+  -df/dv = df/dv_r = c_n (|v_rn| (I - q q^T) + v_rn v_rn^T / |v_rn|) + 2 c_t |v_t| q q^T, symmetric;
+- with respect to the unit tangent at fixed relative velocity (:func:`slender_drag_dq`, the static solver's
+  drag stiffness on a line that turns).
 """
 
 from __future__ import annotations
 
 import math
 
-from moor_env.physics._jit import jit
+from moor_env.physics._jit import jit, jit_step
+from moor_env.physics.tree import add_sym
 
 
 @jit
@@ -57,27 +65,6 @@ def add_slender_added_mass(mm, node, qx, qy, qz, normal_mass, tangential_mass):
 
 
 @jit
-def solve_sym3(m, a, b, c, d, e, f, rx, ry, rz):
-    """Solve (m I + S) x = r for the symmetric S = [[a, d, e], [d, b, f], [e, f, c]]."""
-    a11 = m + a
-    a22 = m + b
-    a33 = m + c
-    c11 = a22 * a33 - f * f
-    c12 = e * f - d * a33
-    c13 = d * f - e * a22
-    c22 = a11 * a33 - e * e
-    c23 = d * e - a11 * f
-    c33 = a11 * a22 - d * d
-    det = a11 * c11 + d * c12 + e * c13
-    inv = 1.0 / det
-    return (
-        (c11 * rx + c12 * ry + c13 * rz) * inv,
-        (c12 * rx + c22 * ry + c23 * rz) * inv,
-        (c13 * rx + c23 * ry + c33 * rz) * inv,
-    )
-
-
-@jit
 def slender_drag_dq(vrx, vry, vrz, qx, qy, qz, half_rho_cdn_d_len, half_rho_cdt_pid_len, out):
     """Derivative of :func:`slender_drag` with respect to the unit tangent q at fixed relative velocity:
     ``out[i, j] = d f_i / d q_j`` [N] (the static solver's Jacobian of current drag on a line that turns).
@@ -99,3 +86,21 @@ def slender_drag_dq(vrx, vry, vrz, qx, qy, qz, half_rho_cdn_d_len, half_rho_cdt_
             if vn > 0.0:
                 a += n[i] * (n[0] * q[0] + n[1] * q[1] + n[2] * q[2]) * vr[j] / vn + n[i] * n[j] * vt / vn
             out[i, j] = -cn * a + ct * (2.0 * q[i] * vr[j] + (vt if i == j else 0.0))
+
+
+@jit_step
+def add_slender_drag_dv(mm, n, h, vrx, vry, vrz, qx, qy, qz, cn, ct):
+    """Add h * (-d drag / d v) of :func:`slender_drag` (cn = 1/2 rho Cd_n D len, ct = 1/2 rho Cd_t pi D len) to
+    the symmetric 3x3 block ``mm[n]`` (xx, yy, zz, xy, xz, yz)."""
+    vt = vrx * qx + vry * qy + vrz * qz
+    nx = vrx - vt * qx
+    ny = vry - vt * qy
+    nz = vrz - vt * qz
+    vn = math.sqrt(nx * nx + ny * ny + nz * nz)
+    # cn (|vn| (I - q q^T) + vn vn^T / |vn|) + 2 ct |vt| q q^T
+    iso = h * cn * vn
+    qq = h * 2.0 * ct * abs(vt) - iso
+    nn = h * cn / vn if vn > 0.0 else 0.0
+    add_sym(mm, n, iso + qq * qx * qx + nn * nx * nx, iso + qq * qy * qy + nn * ny * ny,
+            iso + qq * qz * qz + nn * nz * nz, qq * qx * qy + nn * nx * ny, qq * qx * qz + nn * nx * nz,
+            qq * qy * qz + nn * ny * nz)

@@ -23,9 +23,9 @@ segment snapping taut within a step is an inelastic event. Linearised (implicit)
   (unclipped, so the solve sees where it goes taut), one leaving it no tension. Without this, a segment going
   taut inside a step was stretched explicitly and sprang back elastically in the next one, and on a slack
   chain these snaps ran along it one segment per step and grew until the strain limit;
-- line drag per half segment (the exact 3x3 Jacobian of the Morison drag, skipped where h times its damping
-  rate is below ``DRAG_SKIP`` of the node mass, i.e. where explicit drag is far from any limit); point-mass
-  drag;
+- line drag per half segment (the exact 3x3 Jacobian of the Morison drag, ``hydro.add_slender_drag_dv``,
+  skipped where h times its damping rate is below ``DRAG_SKIP`` of the node mass, i.e. where explicit drag is
+  far from any limit); point-mass drag;
 - seabed contact (vertical spring-damper) and regularised Coulomb friction (its damping slope below the
   friction velocity, its transverse slope above it);
 - the anchor through the node at its back tip: the anchor's own loads stay explicit (it is heavy and its
@@ -69,7 +69,7 @@ import numpy as np
 from moor_env.physics._jit import jit_step
 from moor_env.physics.anchor import rotate_axis
 from moor_env.physics.environment import current_velocity
-from moor_env.physics.hydro import add_slender_added_mass
+from moor_env.physics.hydro import add_slender_added_mass, add_slender_drag_dv
 from moor_env.physics.layout import (
     BF_M11,
     BF_M12,
@@ -173,23 +173,6 @@ def _segment_gain(s, h, orow, node_pos, seg_i, seg_f, mat_f, seg_tension):
     alpha = h * cq + h * h * (kq - kt)
     beta = h * h * kt
     return alpha, beta, qx, qy, qz, kq, kt
-
-
-@jit_step
-def _drag_jacobian(mm, n, h, vrx, vry, vrz, qx, qy, qz, cn, ct):
-    """Add h * (-d drag / d v) of a slender piece (cn = 1/2 rho Cd_n D len, ct = 1/2 rho Cd_t pi D len)."""
-    vt = vrx * qx + vry * qy + vrz * qz
-    nx = vrx - vt * qx
-    ny = vry - vt * qy
-    nz = vrz - vt * qz
-    vn = math.sqrt(nx * nx + ny * ny + nz * nz)
-    # cn (|vn| (I - q q^T) + vn vn^T / |vn|) + 2 ct |vt| q q^T
-    iso = h * cn * vn
-    qq = h * 2.0 * ct * abs(vt) - iso
-    nn = h * cn / vn if vn > 0.0 else 0.0
-    add_sym(mm, n, iso + qq * qx * qx + nn * nx * nx, iso + qq * qy * qy + nn * ny * ny,
-             iso + qq * qz * qz + nn * nz * nz, qq * qx * qy + nn * nx * ny, qq * qx * qz + nn * nx * nz,
-             qq * qy * qz + nn * ny * nz)
 
 
 @jit_step
@@ -333,7 +316,7 @@ def _assemble(h, first, body_node, node_pos, node_vel, node_i, node_f, seg_i, se
                 # linearise only where the drag is stiff on this step's scale (h * rate > DRAG_SKIP)
                 c = h * (cn + 2.0 * ct)
                 if c * c * (rx * rx + ry * ry + rz * rz) > (DRAG_SKIP * node_mass[e]) ** 2:
-                    _drag_jacobian(node_mm, e, h, rx, ry, rz, qx, qy, qz, cn, ct)
+                    add_slender_drag_dv(node_mm, e, h, rx, ry, rz, qx, qy, qz, cn, ct)
         if ea == eb:
             continue
         tension = seg_tension[s]

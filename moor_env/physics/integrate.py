@@ -26,7 +26,6 @@ import math
 from moor_env.physics._jit import jit_step
 from moor_env.physics.anchor import add_point_load, body_acceleration, body_loads, body_point, rotate_axis
 from moor_env.physics.environment import current_velocity
-from moor_env.physics.hydro import solve_sym3
 from moor_env.physics.implicit import implicit_euler_update
 from moor_env.physics.layout import (
     BF_S_TIP,
@@ -64,6 +63,7 @@ from moor_env.physics.layout import (
     TD_TIP,
     TD_VEL,
 )
+from moor_env.physics.linalg3 import solve_sym3
 from moor_env.physics.line import apply_payout, segment_loads
 from moor_env.physics.seabed import seabed_force
 from moor_env.physics.vessels import track_state

@@ -9,9 +9,9 @@ It is driven to zero by Newton's method with pseudo-transient continuation (swit
     (D / tau^2 + K) dx = F(x),        tau grows as the residual falls,
 
 all in one numba kernel. D holds the node masses and the anchor's inertia; K = -dF/dx is analytic: per segment
-dT/dl q q^T + (T / l) (I - q q^T) (the elastic and geometric stiffness), the seabed's vertical stiffness
-(``seabed.seabed_stiffness``), and for the anchor J^T S J plus the geometric stiffness of its arms (a force f at
-axial coordinate s resists a tilt by s (e . f)). Current drag enters the residual but not K (inexact Newton: the drag's change with the line's
+dT/dl q q^T + (T / l) (I - q q^T) (the elastic and geometric stiffness), the seabed's vertical stiffness, and
+for the anchor J^T S J plus the geometric stiffness of its arms (a force f at axial coordinate s resists a tilt
+by s (e . f)). Current drag enters the residual but not K (inexact Newton: the drag's change with the line's
 angle is small next to the geometric stiffness of a hanging line). The system is solved in O(N) by the block
 tree elimination of ``physics/tree.py``, the anchor's five unknowns (position, two tilt angles) as the root.
 
@@ -44,7 +44,6 @@ from moor_env.physics.hydro import slender_drag_dq
 from moor_env.physics.integrate import INTEGRATOR_IMPLICIT_EULER, compute_loads, set_constrained_nodes
 from moor_env.physics.linalg3 import inverse3
 from moor_env.physics.line import segment_axis
-from moor_env.physics.seabed import seabed_stiffness
 from moor_env.physics.statics_guess import first_guess, suspending_offset_m
 from moor_env.physics.statics_relaxation import StaticsReport
 from moor_env.physics.tree import OR_EFF, OR_ORDER, TR_DEG, TR_NB, TR_SEG, build_tree, order
@@ -170,11 +169,19 @@ def _assemble(tau, body_node, node_pos, seg_i, seg_f, mat_f, env_f, current_prof
             m = max(node_mass[n], 1e-6) * inv_tau2
             for c in range(3):
                 dmat[n, c, c] = m
+    depth = env_f[L.EF_DEPTH]
+    kbot = env_f[L.EF_KBOT]
+    soft = env_f[L.EF_SEABED_SMOOTHING]
     for n in range(nn):
         e = orow[n, OR_EFF]
         if e < 0 or e == body_node or node_contact[n] <= 0.0:
             continue
-        dmat[e, 2, 2] += seabed_stiffness(node_pos[n, 2], node_contact[n], env_f)
+        penetration = -depth - node_pos[n, 2]
+        if soft > 0.0:  # slope of the smoothed contact (physics/seabed.py)
+            slope = 0.5 * (1.0 + penetration / math.sqrt(penetration * penetration + soft * soft))
+            dmat[e, 2, 2] += kbot * node_contact[n] * slope
+        elif penetration >= 0.0:
+            dmat[e, 2, 2] += kbot * node_contact[n]
     smoothing = env_f[L.EF_SLACK_SMOOTHING]
     rho = env_f[L.EF_RHO]
     kmat = np.empty((3, 3))

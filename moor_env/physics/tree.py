@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from moor_env.physics._jit import jit_step
 from moor_env.physics.layout import NI_KIND, NI_REF, NODE_FREE, NODE_WELDED, SI_A, SI_ACTIVE, SI_B
+from moor_env.physics.linalg3 import inv_sym3
 
 TR_DEG = 0  # remaining degree; -1 once eliminated below its parent, -2 once eliminated as a root
 TR_NB = 1  # sum of remaining neighbour indices (the parent once the degree is 1)
@@ -25,19 +26,6 @@ TR_SEG = 2  # sum of remaining segment indices (the parent segment once the degr
 OR_ORDER = 0  # elimination order (row k: k-th node eliminated)
 OR_EFF = 1  # effective unknown of a node: itself (free / body root), its parent (welded), or -1 (prescribed)
 OR_FLAGS = 2  # free for the caller (the implicit step keeps its active set there)
-
-
-@jit_step
-def inv_sym3(a11, a22, a33, a12, a13, a23):
-    """Inverse of the symmetric 3x3 [[a11, a12, a13], [a12, a22, a23], [a13, a23, a33]] as 6 entries."""
-    c11 = a22 * a33 - a23 * a23
-    c12 = a13 * a23 - a12 * a33
-    c13 = a12 * a23 - a13 * a22
-    c22 = a11 * a33 - a13 * a13
-    c23 = a12 * a13 - a11 * a23
-    c33 = a11 * a22 - a12 * a12
-    inv = 1.0 / (a11 * c11 + a12 * c12 + a13 * c13)
-    return c11 * inv, c22 * inv, c33 * inv, c12 * inv, c13 * inv, c23 * inv
 
 
 @jit_step
