@@ -265,6 +265,11 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
     return [(DOC, "statics", doc), (README, "statics", readme)]
 
 
+def docs_from_results() -> list[tuple[Path, str, str]]:
+    """:func:`docs_blocks` of the committed ``benchmarks/results/statics.json``."""
+    return docs_blocks(load_result("statics"))
+
+
 def plot(records: list[dict]) -> None:
     """Distribution of the solve time per preset."""
     import matplotlib  # noqa: PLC0415  (optional plotting dependency)
@@ -298,7 +303,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--docs-only", action="store_true", help="rewrite the docs tables from the JSON")
     args = parser.parse_args(argv)
     if args.docs_only:
-        write_blocks(docs_blocks(load_result("statics")))
+        write_blocks(docs_from_results())
         return 0
     load = os.getloadavg()[0]
     _warm_up()

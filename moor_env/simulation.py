@@ -17,7 +17,7 @@ from tqdm.auto import tqdm
 
 from moor_env.compile import VESSEL_SECOND, Model, compile_scene, fall_time_step
 from moor_env.config import SceneConfig, load_scene
-from moor_env.errors import SimulationDiverged
+from moor_env.errors import SimulationDiverged, StaticsNotConverged
 from moor_env.physics import layout as L
 from moor_env.physics.anchor import tilt_deg
 from moor_env.physics.integrate import (
@@ -461,6 +461,11 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: boo
             warm = solve_equilibrium(sim, warm=True, progress=progress, method=method)
             iterations += warm.iterations
             finished = "relaxation" if warm.method == "relaxation" else finished
+        else:
+            err = _adjust_to_drop_height(sim, target)
+            if abs(err) >= tol_m:
+                raise StaticsNotConverged(f"the anchor tip hangs {err:+.3g} m from its drop height after 8 wire "
+                                          f"corrections (tolerance {tol_m:g} m)", None)
         check_fibre_clearance(sim)
     sim.state.line_f[:, L.LF_MAX_TENSION] = 0.0
     wall = time.perf_counter() - t0

@@ -11,18 +11,23 @@ It is driven to zero by Newton's method with pseudo-transient continuation (swit
 all in one numba kernel. D holds the node masses and the anchor's inertia; K = -dF/dx is analytic: per segment
 dT/dl q q^T + (T / l) (I - q q^T) (the elastic and geometric stiffness), the seabed's vertical stiffness, and
 for the anchor J^T S J plus the geometric stiffness of its arms (a force f at axial coordinate s resists a tilt
-by s (e . f)). Current drag enters the residual but not K (inexact Newton: the drag's change with the line's
-angle is small next to the geometric stiffness of a hanging line). The system is solved in O(N) by the block
+by s (e . f)), and the current drag's change with each segment's direction (``hydro.slender_drag_dq``); the
+drag's change with depth and the anchor's own drag are left out of K. The system is solved in O(N) by the block
 tree elimination of ``physics/tree.py``, the anchor's five unknowns (position, two tilt angles) as the root.
 
 The tension-only law has a kink at zero strain. The solve runs on the smoothed law
 EA (e + sqrt(e^2 + s^2)) / 2 with s lowered from ``SMOOTHING_START`` to ``SMOOTHING_FINAL`` = 1e-8 (it differs
 from the exact law by less than EA * 1e-8 / 2, 9 N for the 142 mm chain, on a fully slack segment, and by far
-less on taut ones). A compressed segment keeps a small axial stiffness ``SLACK_STIFFNESS`` EA / l0 in K, so that
-a node between two slack segments (a fold of chain on the seabed) is not singular.
+less on taut ones). The seabed contact is smoothed with it on the first levels and exact on the last. A compressed
+segment keeps the axial stiffness ``SLACK_STIFFNESS`` EA / l0 in K (inexact Newton, as usual in cable statics),
+so that a node between two slack segments (a fold of chain on the seabed) is not singular.
 
-The first guess (``physics/statics_guess.py``) puts every line on its elastic catenary, so that Newton starts
-with the lines in tension and converges in a few tens of iterations.
+The first guess (``physics/statics_guess.py``) puts every line on its elastic catenary (the discrete model's own
+equilibrium where it hangs free), so that Newton starts with the lines in tension: calm suspended scenes converge
+in a few iterations, scenes in current in ten or so. A line resting on the seabed is solved first with the second
+vessel where it hangs clear, then with the vessel brought back in stages. Where Newton's radius is too small (a
+slack loop that must turn), rounds of implicit dynamic relaxation move the slow modes; where that fails too,
+:func:`solve_equilibrium` finishes with the slow solver of ``physics/statics_relaxation.py``.
 """
 
 from __future__ import annotations
@@ -34,7 +39,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from moor_env.compile import VESSEL_SECOND
-from moor_env.errors import SimulationDiverged, StaticsNotConverged
+from moor_env.errors import ConfigError, NoEquilibrium, SimulationDiverged, StaticsNotConverged
 from moor_env.physics import layout as L
 from moor_env.physics import statics_relaxation
 from moor_env.physics._jit import jit_step
@@ -50,8 +55,7 @@ from moor_env.physics.tree import OR_EFF, OR_ORDER, TR_DEG, TR_NB, TR_SEG, build
 
 SMOOTHING_START = 1e-6
 SMOOTHING_FINAL = 1e-8
-# seabed contact smoothed over 1 cm at the start, 0.1 mm at the end (its force at zero penetration is then
-# k_bot A 5e-5 m, about 1 N on a 2 m chain segment against 6.6 kN of weight)
+# seabed contact smoothed over 1 cm on the first level, 1 mm on the next, exact on the final one
 SEABED_SMOOTHING_M_PER_STRAIN = 1e4
 SLACK_STIFFNESS = 1.0  # axial stiffness of a compressed segment in K, as a fraction of EA / l0
 PHASE_ITERATIONS = 30  # iterations on one smoothing level before it is lowered anyway
@@ -102,9 +106,11 @@ def _basis(body_state, basis):
 @jit_step
 def _set_smoothing(env_f, slack):
     """The statics-only smoothing of the tension-only law (strain scale ``slack``) and of the seabed contact
-    (penetration scale ``SEABED_SMOOTHING_M_PER_STRAIN * slack``): both kinks relax and sharpen together."""
+    (penetration scale ``SEABED_SMOOTHING_M_PER_STRAIN * slack``): both kinks relax and sharpen together, and
+    the final level solves on the exact contact."""
     env_f[L.EF_SLACK_SMOOTHING] = slack
-    env_f[L.EF_SEABED_SMOOTHING] = SEABED_SMOOTHING_M_PER_STRAIN * slack
+    final = slack <= SMOOTHING_FINAL * 1.0001
+    env_f[L.EF_SEABED_SMOOTHING] = 0.0 if final else SEABED_SMOOTHING_M_PER_STRAIN * slack
 
 
 @jit_step
@@ -387,6 +393,9 @@ def newton_statics(ctl, max_iter, body_node, node_pos, node_vel, body_state, bod
         if node_i[n, L.NI_KIND] == L.NODE_FREE:
             for c in range(3):
                 node_vel[n, c] = 0.0
+    for c in range(3):
+        body_state[L.BS_VEL + c] = 0.0
+        body_state[L.BS_OMEGA + c] = 0.0
     build_tree(body_node, node_i, seg_i, tree, orow)
     nq = order(body_node, node_i, seg_i, tree, orow)
     dmat = np.zeros((nn, 3, 3))
@@ -409,7 +418,7 @@ def newton_statics(ctl, max_iter, body_node, node_pos, node_vel, body_state, bod
         best_pos[:, :] = node_pos
         best_body[:] = body_state
     for _ in range(max_iter):
-        if not (worst == worst):
+        if not (worst == worst) or not (norm2 == norm2):
             status = STATUS_NONFINITE
             break
         smoothing = env_f[L.EF_SLACK_SMOOTHING]
@@ -515,6 +524,7 @@ def n_static_dofs(sim) -> int:
 
 
 CHUNK_ITERATIONS = 25
+STAGE_TOLERANCE = 1e-2  # residual/weight to which a continuation stage before the last is solved
 VESSEL_STEPS = 12  # a line resting on the seabed is solved first with the second vessel where it hangs clear, then
 # with the vessel brought back in this many steps (the touchdown moves along the line gradually)
 NEWTON_BEFORE_RELAXATION = 12  # Newton iterations from the guess before relaxing instead
@@ -598,22 +608,34 @@ def _move_second_vessel(sim, mean_m: np.ndarray, away_m: float) -> None:
     sim.set_vessel_motion(0.0, 1.0, np.zeros(sim.vessel_mean_m.shape[0]))
 
 
+def _restore_second_vessel(sim, mean_m: np.ndarray, tracks: tuple) -> None:
+    """Put the second vessel and the vessel tracks back as they were before :func:`_move_second_vessel`."""
+    sim.vessel_mean_m[VESSEL_SECOND] = mean_m
+    sim.tracks = tracks[0]
+    sim.env_f[L.EF_TRACK_T0] = tracks[1]
+    sim.env_f[L.EF_TRACK_DT] = tracks[2]
+
+
 def _run_chunk(sim, ctl: np.ndarray, max_iter: int, tol_rel: float, best: tuple[np.ndarray, np.ndarray]) -> int:
     """Up to ``CHUNK_ITERATIONS`` Newton iterations of the simulator's state to ``tol_rel`` (``best``: scratch for
     the best state so far)."""
     st, m, w = sim.state, sim.model, sim.work
     ctl[C_TOL] = tol_rel
-    return newton_statics(ctl, min(CHUNK_ITERATIONS, max_iter - int(ctl[C_ITERATIONS])), body_root(sim),
-                          st.node_pos, st.node_vel, st.body_state, m.body_active, st.node_i, st.node_f, st.seg_i,
-                          st.seg_f, m.mat_f, st.line_f, m.body_f, m.body_q, sim.env_f, m.current_profile, sim.tracks,
-                          w.node_force, w.node_mm, w.node_mass, w.node_contact, w.node_acc, w.seg_tension,
-                          w.body_load, w.body_acc, w.pos0, w.vel0, best[0], best[1])
+    try:
+        return newton_statics(ctl, min(CHUNK_ITERATIONS, max_iter - int(ctl[C_ITERATIONS])), body_root(sim),
+                              st.node_pos, st.node_vel, st.body_state, m.body_active, st.node_i, st.node_f, st.seg_i,
+                              st.seg_f, m.mat_f, st.line_f, m.body_f, m.body_q, sim.env_f, m.current_profile,
+                              sim.tracks, w.node_force, w.node_mm, w.node_mass, w.node_contact, w.node_acc,
+                              w.seg_tension, w.body_load, w.body_acc, w.pos0, w.vel0, best[0], best[1])
+    except np.linalg.LinAlgError as exc:  # the anchor's 5x5 system singular or not finite
+        _set_smoothing(sim.env_f, 0.0)
+        raise StaticsNotConverged(f"static Newton step failed: {exc}") from exc
 
 
 METHODS = ("auto", "newton", "relaxation")
 
 
-def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 400, max_step_m: float = 20.0,
+def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 600, max_step_m: float = 20.0,
                       warm: bool = False, analytic_guess: bool = True, progress: bool = True,
                       method: str = "auto") -> StaticsReport:
     """Drive the simulator's current state to static equilibrium in place.
@@ -622,23 +644,35 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 400, max_step_
     ``physics/statics_relaxation.py`` from the same start; "newton" and "relaxation" run one of them only.
     Other parameters and exceptions as :func:`solve_newton`; the report's ``method`` says which solver finished.
     """
+    if method not in METHODS:
+        raise ConfigError("method", method, "one of " + ", ".join(METHODS))
     start = sim.state.copy()
     try:
         if method == "relaxation":
             raise StaticsNotConverged("the relaxation solver was asked for")
         return solve_newton(sim, tol_rel, max_iter, max_step_m, warm, analytic_guess, progress)
-    except (StaticsNotConverged, SimulationDiverged):
+    except (StaticsNotConverged, SimulationDiverged) as exc:
         if method == "newton":
-            raise
+            raise _as_not_converged(exc) from exc
         _restore(sim.state, start)
         sim.state.t = start.t
+    try:
         with tqdm(desc="statics (relaxation)", unit="s relaxed", disable=not progress, leave=False,
                   delay=PROGRESS_AFTER_S) as bar:
             return statics_relaxation.solve_equilibrium(sim, tol_rel=tol_rel, warm=warm,
                                                         analytic_guess=analytic_guess, tick=bar.update)
+    except SimulationDiverged as exc:
+        raise _as_not_converged(exc) from exc
 
 
-def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = 400, max_step_m: float = 20.0,
+def _as_not_converged(exc: Exception) -> StaticsNotConverged:
+    """A blow-up of the pseudo dynamics of a static solve is a statics failure, not a simulation result."""
+    if isinstance(exc, StaticsNotConverged):
+        return exc
+    return StaticsNotConverged(f"static solve failed: its relaxation diverged ({exc})")
+
+
+def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = 600, max_step_m: float = 20.0,
                       warm: bool = False, analytic_guess: bool = True, progress: bool = True) -> StaticsReport:
     """Drive the simulator's current state to static equilibrium in place.
 
@@ -680,14 +714,20 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = 400, max_step_m: fl
     best = (np.empty_like(sim.state.node_pos), np.empty(L.N_BODY_STATE))
     current = float(sim.env_f[L.EF_CUR_SCALE])
     second = sim.vessel_mean_m[VESSEL_SECOND].copy() if sim.vessel_mean_m.shape[0] > VESSEL_SECOND else None
+    tracks = (sim.tracks.copy(), sim.env_f[L.EF_TRACK_T0], sim.env_f[L.EF_TRACK_DT])
     offset = suspending_offset_m(sim) if mode != 0 and second is not None else 0.0
-    if offset > 0.0:  # start with the second vessel where the line hangs clear of the seabed
-        _move_second_vessel(sim, second, offset)
-        first_guess(sim)
-    stages = _stages(warm, current, offset)
     t0 = time.perf_counter()
     bar = None
     try:
+        if offset > 0.0:  # start with the second vessel where the line hangs clear of the seabed
+            _move_second_vessel(sim, second, offset)
+            try:
+                first_guess(sim)
+            except NoEquilibrium:  # the helper geometry is too taut: solve from the scene's own guess
+                _restore_second_vessel(sim, second, tracks)
+                offset = 0.0
+                first_guess(sim)
+        stages = _stages(warm, current, offset)
         for stage, (scale, away) in enumerate(stages):
             sim.env_f[L.EF_CUR_SCALE] = scale
             if second is not None and offset > 0.0:
@@ -695,6 +735,7 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = 400, max_step_m: fl
             last = stage == len(stages) - 1
             ctl[C_STATUS] = STATUS_RUNNING
             ctl[C_BEST] = 0.0
+            ctl[C_SINCE_BEST] = 0.0
             if stage > 0:  # each stage starts near the last equilibrium, on the smoothed laws again
                 ctl[C_TAU] = max(ctl[C_TAU], 1e3)
                 ctl[C_SMOOTHING] = SMOOTHING_START
@@ -703,7 +744,7 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = 400, max_step_m: fl
             budget = NEWTON_BEFORE_RELAXATION
             while ctl[C_ITERATIONS] < max_iter:
                 status = _run_chunk(sim, ctl, min(max_iter, int(ctl[C_ITERATIONS]) + budget),
-                                    tol_rel if last else 10.0 * tol_rel, best)
+                                    tol_rel if last else max(STAGE_TOLERANCE, tol_rel), best)
                 if status == STATUS_CONVERGED:
                     break
                 if progress and bar is None and time.perf_counter() - t0 > PROGRESS_AFTER_S:
@@ -715,18 +756,24 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = 400, max_step_m: fl
                 if ctl[C_PHASE_IT] >= budget or status == STATUS_NONFINITE:
                     # Newton's radius is small where a slack loop must turn (a segment's length grows with the
                     # square of its rotation, times EA): relax the slow modes dynamically, then Newton again
-                    relax_implicitly(sim, RELAXATION_S)
+                    before = sim.state.copy()
+                    try:
+                        relax_implicitly(sim, RELAXATION_S)
+                    except SimulationDiverged:  # the pseudo dynamics blew up: Newton goes on from where it was
+                        _restore(sim.state, before)
                     ctl[C_TAU] = TAU_START_S
                     ctl[C_PHASE_IT] = 0.0
                     ctl[C_BEST] = 0.0
+                    ctl[C_SINCE_BEST] = 0.0
                     ctl[C_STATUS] = STATUS_RUNNING
                     budget = NEWTON_AFTER_RELAXATION
             if ctl[C_STATUS] != STATUS_CONVERGED:
                 break
     finally:
         sim.env_f[L.EF_CUR_SCALE] = current
+        _set_smoothing(sim.env_f, 0.0)
         if second is not None and offset > 0.0:
-            _move_second_vessel(sim, second, 0.0)
+            _restore_second_vessel(sim, second, tracks)
         if bar is not None:
             bar.close()
         _stop(sim.state)

@@ -243,7 +243,7 @@ def _balance_release_point(sim, release: np.ndarray, target_z: float, hang_n: fl
     u = np.array([1.0, 0.0])
     for _ in range(BALANCE_ROUNDS):
         if "mooring_line" in m.lines:
-            h_m, v_m = _check_mooring_line(sim, release)
+            h_m, v_m = _hang(sim, "mooring_line", release, _top(sim, "mooring_line"), place=False)[:2]
             towards = _top(sim, "mooring_line")[:2] - release[:2]
             norm = float(np.hypot(*towards))
             if norm > 1e-9:
@@ -257,6 +257,8 @@ def _balance_release_point(sim, release: np.ndarray, target_z: float, hang_n: fl
         release = np.array([new[0], new[1], target_z])
         if moved < 1e-6 and abs(error) < 1e-6:
             break
+    if "mooring_line" in m.lines:  # the line's strength at the balanced release point, not on the way there
+        _check_mooring_line(sim, release)
     start, nseg = st.line_i[wire, L.LI_SEG_START], st.line_i[wire, L.LI_NSEG]
     total = float(np.sum(sec_len))
     st.seg_f[start:start + nseg, L.SF_L0] *= total / float(np.sum(st.seg_f[start:start + nseg, L.SF_L0]))
