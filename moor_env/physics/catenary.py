@@ -236,24 +236,11 @@ def _evaluate(kind, u, h, p0, sec_w, sec_ea, sec_len, total):
 @jit
 def _walk_back(h, sec_w, sec_ea, sec_len, a_touchdown, a_stop):
     """(dx, dz, V) walking from a touchdown at arc ``a_touchdown`` (V = 0 there) back toward end A to arc
-    ``a_stop`` (<= a_touchdown); dx and dz are the distance covered away from the touchdown and the rise."""
-    x = 0.0
-    z = 0.0
-    v = 0.0
-    end = 0.0
+    ``a_stop`` (<= a_touchdown): :func:`walk` along the line turned end for end."""
+    total = 0.0
     for k in range(sec_len.shape[0]):
-        end += sec_len[k]
-    for k in range(sec_len.shape[0] - 1, -1, -1):
-        start = end - sec_len[k]
-        lo = max(start, a_stop)
-        hi = min(a_touchdown, end)
-        if hi > lo:
-            dx, dz = _piece(h, v, sec_w[k], sec_ea[k], hi - lo)
-            x += dx
-            z += dz
-            v += sec_w[k] * (hi - lo)
-        end = start
-    return x, z, v
+        total += sec_len[k]
+    return walk(h, 0.0, sec_w[::-1], sec_ea[::-1], sec_len[::-1], total - a_touchdown, total - a_stop)
 
 
 @jit
