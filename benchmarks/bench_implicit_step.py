@@ -5,7 +5,7 @@ Run from the repository root: ``python benchmarks/bench_implicit_step.py [--repe
 ``docs/implicit-step.md`` (``--docs-only``: only the tables, from the committed JSON).
 
 ``--baseline-root DIR`` times another copy of the package as well (a directory holding ``moor_env`` and
-``configs``, e.g. ``mkdir /tmp/old && git archive HEAD moor_env configs | tar -x -C /tmp/old``), in a subprocess
+``configs``, e.g. ``mkdir baseline && git archive HEAD moor_env configs | tar -x -C baseline``), in a subprocess
 per round, alternating with this tree's rounds so that both see the same machine load; the JSON then holds both,
 their ratio and the relative change of the outputs. ``--root DIR`` runs this script on another tree (what the
 baseline subprocess does).
