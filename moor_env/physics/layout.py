@@ -113,6 +113,24 @@ BF_BACK_CDA = 11
 BF_LENGTH = 12
 N_BODY_F = 13
 
+# contact_f slots (contact between line nodes and the anchor's surface, physics/contact.py)
+CF_ON = 0  # 1 where contact is modelled, 0 where lines pass through the anchor unhindered
+CF_STIFFNESS = 1  # normal stiffness of one node's contact [N/m]
+CF_RESTITUTION = 2  # coefficient of restitution of a node landing on the anchor [-]
+CF_ZETA = 3  # damping ratio of a node's contact oscillation, set by the restitution [-]
+CF_SPEED = 4  # characteristic contact speed the stiffness was chosen for [m/s]
+CF_MU = 5  # Coulomb friction coefficient [-]
+CF_STICK_SPEED = 6  # sliding speed below which friction is viscous (regularised stick) [m/s]
+N_CONTACT_F = 7
+
+# contact_shape columns: the anchor's surface as coaxial cylinders (physics/contact.py)
+CS_FRONT = 0  # axial coordinate of the end towards the tip, from the COG [m]
+CS_BACK = 1  # axial coordinate of the end towards the back [m]
+CS_RADIUS = 2  # [m]
+CS_FRONT_INNER = 3  # inner radius of the front end's face: 0 a full disc, the neighbour's radius an annular step [m]
+CS_BACK_INNER = 4  # (equal to CS_RADIUS where a neighbour at least as wide covers the end: no face)
+N_CONTACT_SHAPE = 5
+
 # body_q columns (quadrature points along the anchor)
 BQ_S = 0
 BQ_DS = 1

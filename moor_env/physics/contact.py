@@ -1,0 +1,475 @@
+"""Contact between line nodes and the anchor's surface: geometry, penalty law with friction, and its Jacobians.
+
+Why: lengthwise a chain with the seed's tangential drag falls faster than the anchor (seed 003, Landhaug 2015,
+*Dynamic Simulation of Dart Anchor Installation*, chapter 8: C_D,T = 0.0069), so the vertical chain catches up
+with the anchor's back end during the fall. Without contact it would pass into the body; with it, it lands on
+the back end, rests there or slides off along the shaft, and its momentum goes into the anchor.
+
+Surface. The anchor model is axisymmetric: each section is a cylinder of its outer diameter (the fins' envelope
+is the outer diameter of the fin sections, as the drag and added mass use it). The surface is the union of these
+coaxial cylinders (:func:`anchor_shape` merges neighbours of equal radius), closed by the tip face, the back end
+face and the annular steps between sections of different radius. In the anchor's frame a point has the axial
+coordinate a = (x - r_G) . e (+ towards the tip, as ``anchor.py``) and the radius rho from the axis, with the
+radial unit vector u. :func:`surface_distance` gives the signed distance sd (negative inside), its gradient, the
+outward normal n, and its Hessian H = dn/dx (zero on the faces, (I - e e^T - u u^T) / rho on the shaft, that
+plus the rim's own curvature outside a rim). The closest surface point is x - sd n. Inside, the depth is the
+distance to the nearest face or shaft of the cylinders that contain the point (ends covered by a neighbour at
+least as wide are not faces); it is exact for a single cylinder and underestimates the depth only within a
+penetration of an inner step's rim.
+
+Law. A free node of mass m inside the surface (depth d = -sd > 0), with velocity w = v - v_b relative to the body
+point at the node (v_b = v_G + omega x (x - r_G)), feels
+
+    f_n = k d - c (w . n),   c = 2 zeta sqrt(k m),   F = f_n n + F_t,
+
+    F_t = -min(mu N |w_t| / v_s', mu N) w_t / |w_t|,   N = max(f_n, 0),   v_s' = max(v_s, mu N / c),
+
+with w_t = w - (w . n) n. The body feels -F at the node, i.e. the moment (x - r_G) x (-F) about its COG (the
+point whose velocity enters w, so the contact's power is -F . w: the spring stores, the dampers dissipate).
+
+- Normal: a linear spring-dashpot (Kelvin-Voigt, as the Hooke model of penalty contact in rigid-body codes, e.g.
+  Project Chrono's SMC contact). While the node is inside the law stays linear (it is not cut at f_n = 0), so
+  the restitution is exactly e = exp(-zeta pi / sqrt(1 - zeta^2)), i.e. zeta = -ln e / sqrt(pi^2 + ln^2 e),
+  and e = 0 gives zeta = 1: the node comes to rest on the surface without rebound. (Cut at zero, a critically
+  damped contact would let go while still inside and leave at 13.5 % of its impact speed.) The price is a pull
+  of at most c |w . n| while inside and moving out, for at most d / |w . n|: an impulse below c d, i.e. below
+  the node's momentum at 2 zeta omega d, a few mm/s for a resting node.
+- Friction: Coulomb, regularised as the seabed's (``seabed.py``): viscous below the stick speed v_s, so that a
+  resting node feels none and there is no stick state to carry. The viscous slope mu N / v_s' never exceeds
+  the normal damping c, so the friction is no stiffer for the explicit step than the normal law (under an impact
+  N is large and the stick zone widens to mu N / c).
+
+Jacobians (:func:`node_contact` with a ``jac`` array): dF/dx and dF/dv, exact (including the turning of the
+normal, the body's rotation and the friction's dependence on the normal force; checked against central
+differences), for the implicit step (which takes their symmetric part) and the static solver. The body's state
+is held fixed: the anchor is explicit in the implicit step.
+
+Parameters (:func:`contact_parameters`, slots ``CF_*`` of ``layout``): the stiffness k is chosen so that a node
+of the chain meeting the surface at the characteristic speed v_c penetrates ``penetration_m`` at most (peak
+penetration of the damped oscillator: v_c P(zeta) / omega with omega = sqrt(k / m) and P(1) = 1/e), and never
+above ``axial_fraction`` (0.1) times 4 EA / l, the stiffness that would put the node's contact frequency on the
+segment's axial mode 2 sqrt(EA / (m l)): the fastest mode of the model, which sets the explicit step, then rises
+by at most 5 %, inside the step's safety factor (0.9). For the 142 mm chain in 1 m segments (m = 442 kg, EA =
+1.74e9 N) at v_c = 15 m/s and 1 cm: k = 1.35e8 N/m (omega = 552 rad/s, 2 % of 4 EA / l), and 4.4 mm at 6 m/s.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from moor_env.physics._jit import jit
+from moor_env.physics.layout import (
+    BS_AXIS,
+    BS_OMEGA,
+    BS_POS,
+    BS_VEL,
+    CF_MU,
+    CF_ON,
+    CF_RESTITUTION,
+    CF_SPEED,
+    CF_STICK_SPEED,
+    CF_STIFFNESS,
+    CF_ZETA,
+    CS_BACK,
+    CS_BACK_INNER,
+    CS_FRONT,
+    CS_FRONT_INNER,
+    CS_RADIUS,
+    N_CONTACT_F,
+    N_CONTACT_SHAPE,
+)
+
+# features of the surface nearest to a point
+FEATURE_SHAFT = 0
+FEATURE_FRONT = 1
+FEATURE_BACK = 2
+FEATURE_RIM = 3
+
+RESTITUTION = 0.0  # a chain landing on the anchor piles up: its links collapse onto each other, it does not bounce
+FRICTION_COEFFICIENT = 0.3  # wet steel on steel
+STICK_SPEED_M_S = 0.05  # as the seabed's default friction velocity
+PENETRATION_M = 0.01  # peak penetration of a chain node at the characteristic speed
+AXIAL_FRACTION = 0.1  # stiffness cap as a fraction of 4 EA / l (the segment's axial mode)
+
+
+def anchor_shape(section_lengths_m, section_diameters_m, s_tip_m: float) -> np.ndarray:
+    """The anchor's surface as coaxial cylinders (rows of ``CS_*`` columns), front (tip) to back.
+
+    Parameters
+    ----------
+    section_lengths_m, section_diameters_m : sequence of float
+        Length and outer diameter of each section, listed from the tip backwards (as the anchor config).
+    s_tip_m : float
+        Axial coordinate of the tip from the COG (+ towards the tip) [m].
+    """
+    rows: list[list[float]] = []
+    front = s_tip_m
+    for length, diameter in zip(section_lengths_m, section_diameters_m, strict=True):
+        back = front - length
+        radius = 0.5 * diameter
+        if rows and rows[-1][CS_RADIUS] == radius:
+            rows[-1][CS_BACK] = back
+        else:
+            rows.append([front, back, radius, 0.0, 0.0])
+        front = back
+    for i in range(len(rows) - 1):
+        # where two cylinders meet, the wider one's end is an annulus outside the narrower one's radius; the
+        # narrower one's end is covered (its inner radius is its own radius: no face)
+        narrow = min(rows[i][CS_RADIUS], rows[i + 1][CS_RADIUS])
+        rows[i][CS_BACK_INNER] = narrow
+        rows[i + 1][CS_FRONT_INNER] = narrow
+    shape = np.zeros((len(rows), N_CONTACT_SHAPE))
+    shape[:] = rows
+    return shape
+
+
+def zeta_from_restitution(restitution: float) -> float:
+    """Damping ratio of a linear spring-dashpot whose restitution is ``restitution`` (1 at 0: critical)."""
+    if not 0.0 <= restitution <= 1.0:
+        raise ValueError(f"restitution {restitution} outside [0, 1]")
+    if restitution == 0.0:
+        return 1.0
+    log_e = math.log(restitution)
+    return -log_e / math.sqrt(math.pi**2 + log_e**2)
+
+
+def peak_penetration_factor(zeta: float) -> float:
+    """P(zeta): the peak penetration of a node meeting the surface at speed v is v P / omega."""
+    if zeta >= 1.0:
+        # overdamped: the peak of (exp(r1 t) - exp(r2 t)) / (r1 - r2) times omega
+        if zeta == 1.0:
+            return math.exp(-1.0)
+        s = math.sqrt(zeta * zeta - 1.0)
+        r1, r2 = -zeta + s, -zeta - s
+        t = math.log(r2 / r1) / (r1 - r2)
+        return (math.exp(r1 * t) - math.exp(r2 * t)) / (r1 - r2)
+    s = math.sqrt(1.0 - zeta * zeta)
+    return math.exp(-zeta / s * math.atan2(s, zeta))
+
+
+def contact_parameters(ea_n: float, segment_m: float, node_mass_kg: float, contact_speed_m_s: float,
+                       restitution: float = RESTITUTION, friction_coefficient: float = FRICTION_COEFFICIENT,
+                       stick_speed_m_s: float = STICK_SPEED_M_S, penetration_m: float = PENETRATION_M,
+                       axial_fraction: float = AXIAL_FRACTION, on: bool = True) -> np.ndarray:
+    """The ``contact_f`` slots for the line that meets the anchor (the chain), as the module docstring derives.
+
+    Parameters
+    ----------
+    ea_n, segment_m, node_mass_kg : float
+        Axial stiffness [N], segment length [m] and node mass [kg] of the line's finest segments near the anchor.
+    contact_speed_m_s : float
+        Characteristic speed at which its nodes meet the anchor's surface [m/s].
+    restitution, friction_coefficient, stick_speed_m_s : float
+        Normal restitution, Coulomb coefficient, and the sliding speed of the regularised stick zone [m/s].
+    penetration_m : float
+        Peak penetration of a node meeting the surface at ``contact_speed_m_s`` [m].
+    axial_fraction : float
+        Cap of the stiffness as a fraction of 4 EA / l.
+    on : bool
+        Whether the kernels apply the contact.
+    """
+    for name, value in (("ea_n", ea_n), ("segment_m", segment_m), ("node_mass_kg", node_mass_kg),
+                        ("contact_speed_m_s", contact_speed_m_s), ("stick_speed_m_s", stick_speed_m_s),
+                        ("penetration_m", penetration_m), ("axial_fraction", axial_fraction)):
+        if not value > 0.0:
+            raise ValueError(f"{name} {value} must be positive")
+    if friction_coefficient < 0.0:
+        raise ValueError(f"friction_coefficient {friction_coefficient} must not be negative")
+    zeta = zeta_from_restitution(restitution)
+    omega = contact_speed_m_s * peak_penetration_factor(zeta) / penetration_m
+    stiffness = min(node_mass_kg * omega * omega, axial_fraction * 4.0 * ea_n / segment_m)
+    out = np.zeros(N_CONTACT_F)
+    out[CF_ON] = 1.0 if on else 0.0
+    out[CF_STIFFNESS] = stiffness
+    out[CF_RESTITUTION] = restitution
+    out[CF_ZETA] = zeta
+    out[CF_SPEED] = contact_speed_m_s
+    out[CF_MU] = friction_coefficient
+    out[CF_STICK_SPEED] = stick_speed_m_s
+    return out
+
+
+@jit
+def _from_cog(px, py, pz, body_state):
+    """The point relative to the anchor's COG, r = x - r_G, and its axial coordinate a = r . e."""
+    rx = px - body_state[BS_POS]
+    ry = py - body_state[BS_POS + 1]
+    rz = pz - body_state[BS_POS + 2]
+    return rx, ry, rz, rx * body_state[BS_AXIS] + ry * body_state[BS_AXIS + 1] + rz * body_state[BS_AXIS + 2]
+
+
+@jit
+def _anchor_frame(px, py, pz, body_state):
+    """Axial coordinate a, radius rho, radial unit vector u and axis e of a point in the anchor's frame."""
+    ex = body_state[BS_AXIS]
+    ey = body_state[BS_AXIS + 1]
+    ez = body_state[BS_AXIS + 2]
+    rx, ry, rz, a = _from_cog(px, py, pz, body_state)
+    qx = rx - a * ex
+    qy = ry - a * ey
+    qz = rz - a * ez
+    rho = math.sqrt(qx * qx + qy * qy + qz * qz)
+    if rho > 0.0:
+        return a, rho, qx / rho, qy / rho, qz / rho, ex, ey, ez
+    # on the axis: any radial direction (the shaft's normal is then undefined, its depth the full radius)
+    if abs(ex) < 0.9:
+        qx, qy, qz = 0.0, -ez, ey
+    else:
+        qx, qy, qz = ez, 0.0, -ex
+    norm = math.sqrt(qx * qx + qy * qy + qz * qz)
+    return a, 0.0, qx / norm, qy / norm, qz / norm, ex, ey, ez
+
+
+@jit
+def _end_depth(gap, inner, rho):
+    """Depth below an end face ``gap`` [m] inside it (annulus from radius ``inner`` out); inside the annulus'
+    inner radius the nearest point of the face is its inner rim. Returns (depth, e-part, u-part of the normal
+    direction from the point to the face, or to the rim)."""
+    if rho >= inner:
+        return gap, 1.0, 0.0
+    dr = inner - rho
+    depth = math.sqrt(gap * gap + dr * dr)
+    return depth, gap / depth, dr / depth
+
+
+@jit
+def surface_distance(px, py, pz, body_state, shape):
+    """Signed distance of a point to the anchor's surface and its derivatives.
+
+    Returns
+    -------
+    sd : float
+        Signed distance [m], negative inside.
+    nx, ny, nz : float
+        Outward normal (the gradient of sd); the closest surface point is x - sd n.
+    hxx, hyy, hzz, hxy, hxz, hyz : float
+        The Hessian of sd (dn/dx, symmetric) [1/m].
+    feature : int
+        ``FEATURE_SHAFT``, ``FEATURE_FRONT``, ``FEATURE_BACK`` (end faces and steps) or ``FEATURE_RIM`` (an edge
+        of a face: outside a convex rim, or inside near the inner rim of a step).
+    """
+    a, rho, ux, uy, uz, ex, ey, ez = _anchor_frame(px, py, pz, body_state)
+    depth = -math.inf
+    feature = FEATURE_SHAFT
+    ca = 0.0  # the normal's components along e and u, and the distance to a rim
+    cr = 1.0
+    dist = 0.0
+    out = math.inf
+    for i in range(shape.shape[0]):
+        front = shape[i, CS_FRONT]
+        back = shape[i, CS_BACK]
+        radius = shape[i, CS_RADIUS]
+        if back <= a <= front and rho <= radius:
+            d = radius - rho
+            f = FEATURE_SHAFT
+            fa = 0.0
+            fr = 1.0
+            df, pa, pr = _end_depth(front - a, shape[i, CS_FRONT_INNER], rho)
+            if df < d:
+                d = df
+                f = FEATURE_FRONT if pr == 0.0 else FEATURE_RIM
+                fa = pa
+                fr = pr
+            db, pa, pr = _end_depth(a - back, shape[i, CS_BACK_INNER], rho)
+            if db < d:
+                d = db
+                f = FEATURE_BACK if pr == 0.0 else FEATURE_RIM
+                fa = -pa
+                fr = pr
+            if d > depth:
+                depth = d
+                feature = f
+                ca = fa
+                cr = fr
+                dist = d
+        elif depth == -math.inf:
+            da = a - back if a < back else (a - front if a > front else 0.0)
+            dr = rho - radius if rho > radius else 0.0
+            d = math.sqrt(da * da + dr * dr)
+            if d < out:
+                out = d
+                if dr > 0.0 and da != 0.0:
+                    feature = FEATURE_RIM
+                elif dr > 0.0:
+                    feature = FEATURE_SHAFT
+                else:
+                    feature = FEATURE_FRONT if da > 0.0 else FEATURE_BACK
+                ca = da / d
+                cr = dr / d
+                dist = d
+    sd = out if depth == -math.inf else -depth
+    nx = ca * ex + cr * ux
+    ny = ca * ey + cr * uy
+    nz = ca * ez + cr * uz
+    if feature == FEATURE_FRONT or feature == FEATURE_BACK:
+        return sd, nx, ny, nz, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, feature
+    # the turning of the radial direction, n_u (I - e e^T - u u^T) / rho with I - e e^T - u u^T = t t^T,
+    # t = e x u; at a rim also the turning in the (e, u) plane, sign(sd) (e e^T + u u^T - n n^T) / dist
+    kt = cr / rho if rho > 0.0 else 0.0
+    tx = ey * uz - ez * uy
+    ty = ez * ux - ex * uz
+    tz = ex * uy - ey * ux
+    kp = 0.0
+    if feature == FEATURE_RIM:
+        kp = 1.0 / dist if sd > 0.0 else -1.0 / dist
+    return (sd, nx, ny, nz,
+            kp * (ex * ex + ux * ux - nx * nx) + kt * tx * tx,
+            kp * (ey * ey + uy * uy - ny * ny) + kt * ty * ty,
+            kp * (ez * ez + uz * uz - nz * nz) + kt * tz * tz,
+            kp * (ex * ey + ux * uy - nx * ny) + kt * tx * ty,
+            kp * (ex * ez + ux * uz - nx * nz) + kt * tx * tz,
+            kp * (ey * ez + uy * uz - ny * nz) + kt * ty * tz,
+            feature)
+
+
+@jit
+def within_reach(px, py, pz, body_state, shape):
+    """Whether a point lies inside the cylinder that bounds the anchor (cheap test before the contact law)."""
+    rx, ry, rz, a = _from_cog(px, py, pz, body_state)
+    if a > shape[0, CS_FRONT] or a < shape[shape.shape[0] - 1, CS_BACK]:
+        return False
+    rho2 = rx * rx + ry * ry + rz * rz - a * a
+    for i in range(shape.shape[0]):
+        if rho2 <= shape[i, CS_RADIUS] ** 2:
+            return True
+    return False
+
+
+@jit
+def node_contact(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f, jac):
+    """Contact force on a node of mass ``mass_kg`` at (p, v) from the anchor (module docstring).
+
+    ``jac``: an array of shape (2, 3, 3) receives dF/dx [N/m] and dF/dv [N s/m] (zeros out of contact); pass an
+    array of shape (0, 3, 3) where they are not needed.
+
+    Returns
+    -------
+    depth : float
+        Penetration [m] (0 outside).
+    fx, fy, fz : float
+        Force on the node [N]; the body takes the opposite force at the node (:func:`add_contact_reaction`).
+    """
+    want = jac.shape[0] >= 2
+    if want:
+        for i in range(3):
+            for j in range(3):
+                jac[0, i, j] = 0.0
+                jac[1, i, j] = 0.0
+    if not within_reach(px, py, pz, body_state, shape):
+        return 0.0, 0.0, 0.0, 0.0
+    sd, nx, ny, nz, hxx, hyy, hzz, hxy, hxz, hyz, feature = surface_distance(px, py, pz, body_state, shape)
+    if sd >= 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    depth = -sd
+    k = contact_f[CF_STIFFNESS]
+    c = 2.0 * contact_f[CF_ZETA] * math.sqrt(k * mass_kg)
+    mu = contact_f[CF_MU]
+    # relative velocity to the body point at the node
+    ox = body_state[BS_OMEGA]
+    oy = body_state[BS_OMEGA + 1]
+    oz = body_state[BS_OMEGA + 2]
+    rx, ry, rz, _ = _from_cog(px, py, pz, body_state)
+    wx = vx - body_state[BS_VEL] - (oy * rz - oz * ry)
+    wy = vy - body_state[BS_VEL + 1] - (oz * rx - ox * rz)
+    wz = vz - body_state[BS_VEL + 2] - (ox * ry - oy * rx)
+    wn = wx * nx + wy * ny + wz * nz
+    fn = k * depth - c * wn
+    tx = wx - wn * nx
+    ty = wy - wn * ny
+    tz = wz - wn * nz
+    st = math.sqrt(tx * tx + ty * ty + tz * tz)
+    normal = fn if fn > 0.0 else 0.0
+    slope = 0.0  # friction as -slope * w_t (viscous) or -mu N w_t / |w_t| (sliding)
+    sliding = False
+    viscous_from_n = False
+    if normal > 0.0 and mu > 0.0:
+        slope = mu * normal / contact_f[CF_STICK_SPEED]
+        viscous_from_n = True
+        if slope > c:
+            slope = c
+            viscous_from_n = False
+        if slope * st > mu * normal:
+            sliding = True
+    if sliding:
+        g = mu * normal / st
+    else:
+        g = slope
+    fx = fn * nx - g * tx
+    fy = fn * ny - g * ty
+    fz = fn * nz - g * tz
+    if want:
+        _contact_jacobian(jac, nx, ny, nz, hxx, hyy, hzz, hxy, hxz, hyz, ox, oy, oz, wx, wy, wz, wn, fn, k, c,
+                          mu, contact_f[CF_STICK_SPEED], tx, ty, tz, st, normal, g, sliding, viscous_from_n)
+    return depth, fx, fy, fz
+
+
+@jit
+def _contact_jacobian(jac, nx, ny, nz, hxx, hyy, hzz, hxy, hxz, hyz, ox, oy, oz, wx, wy, wz, wn, fn, k, c, mu,
+                      stick, tx, ty, tz, st, normal, g, sliding, viscous_from_n):
+    """dF/dx and dF/dv of :func:`node_contact` into ``jac`` (body state fixed)."""
+    n = (nx, ny, nz)
+    t = (tx, ty, tz)
+    h = ((hxx, hxy, hxz), (hxy, hyy, hyz), (hxz, hyz, hzz))
+    # dw/dx = -[omega]x (the body point's velocity follows the node), dw/dv = I
+    om = ((0.0, oz, -oy), (-oz, 0.0, ox), (oy, -ox, 0.0))  # -[omega]x
+    # d(w.n)/dx = n^T dw/dx + (H w)^T ; d(w.n)/dv = n^T
+    hw = (h[0][0] * wx + h[0][1] * wy + h[0][2] * wz, h[1][0] * wx + h[1][1] * wy + h[1][2] * wz,
+          h[2][0] * wx + h[2][1] * wy + h[2][2] * wz)
+    dwn_dx = (n[0] * om[0][0] + n[1] * om[1][0] + n[2] * om[2][0] + hw[0],
+              n[0] * om[0][1] + n[1] * om[1][1] + n[2] * om[2][1] + hw[1],
+              n[0] * om[0][2] + n[1] * om[1][2] + n[2] * om[2][2] + hw[2])
+    # f_n = k d - c w.n: df_n/dx = -k n^T - c dwn/dx, df_n/dv = -c n^T
+    dfn_dx = (-k * n[0] - c * dwn_dx[0], -k * n[1] - c * dwn_dx[1], -k * n[2] - c * dwn_dx[2])
+    dfn_dv = (-c * n[0], -c * n[1], -c * n[2])
+    dn_x = dfn_dx if normal > 0.0 else (0.0, 0.0, 0.0)
+    dn_v = dfn_dv if normal > 0.0 else (0.0, 0.0, 0.0)
+    # dg: the friction's factor on w_t
+    if sliding:
+        gx = (mu * dn_x[0] / st, mu * dn_x[1] / st, mu * dn_x[2] / st)
+        gv = (mu * dn_v[0] / st, mu * dn_v[1] / st, mu * dn_v[2] / st)
+    elif viscous_from_n:
+        gx = (mu * dn_x[0] / stick, mu * dn_x[1] / stick, mu * dn_x[2] / stick)
+        gv = (mu * dn_v[0] / stick, mu * dn_v[1] / stick, mu * dn_v[2] / stick)
+    else:
+        gx = (0.0, 0.0, 0.0)
+        gv = (0.0, 0.0, 0.0)
+    for i in range(3):
+        for j in range(3):
+            eye = 1.0 if i == j else 0.0
+            # w_t = w - (w.n) n: dw_t/dx = dw/dx - n dwn/dx - (w.n) H, dw_t/dv = I - n n^T
+            dwt_x = om[i][j] - n[i] * dwn_dx[j] - wn * h[i][j]
+            dwt_v = eye - n[i] * n[j]
+            ax = n[i] * dfn_dx[j] + fn * h[i][j]
+            av = n[i] * dfn_dv[j]
+            if sliding:
+                # g = mu N / |w_t|: d(g w_t) = w_t dg + g (I - t t^T / |t|^2) dw_t
+                px_ = 0.0
+                pv_ = 0.0
+                for m in range(3):
+                    proj = (1.0 if i == m else 0.0) - t[i] * t[m] / (st * st)
+                    dwt_xm = om[m][j] - n[m] * dwn_dx[j] - wn * h[m][j]
+                    dwt_vm = (1.0 if m == j else 0.0) - n[m] * n[j]
+                    px_ += proj * dwt_xm
+                    pv_ += proj * dwt_vm
+                ax -= t[i] * gx[j] + g * px_
+                av -= t[i] * gv[j] + g * pv_
+            else:
+                ax -= t[i] * gx[j] + g * dwt_x
+                av -= t[i] * gv[j] + g * dwt_v
+            jac[0, i, j] = ax
+            jac[1, i, j] = av
+
+
+@jit
+def add_contact_reaction(load, body_state, px, py, pz, fx, fy, fz):
+    """Add the reaction of a contact force (fx, fy, fz) on a node at p to the body's ``load`` (F [N], M about
+    the COG [N m]): -F at the node."""
+    rx, ry, rz, _ = _from_cog(px, py, pz, body_state)
+    load[0] -= fx
+    load[1] -= fy
+    load[2] -= fz
+    load[3] -= ry * fz - rz * fy
+    load[4] -= rz * fx - rx * fz
+    load[5] -= rx * fy - ry * fx
