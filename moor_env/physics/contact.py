@@ -5,17 +5,17 @@ Why: lengthwise a chain with the seed's tangential drag falls faster than the an
 with the anchor's back end during the fall. Without contact it would pass into the body; with it, it lands on
 the back end, rests there or slides off along the shaft, and its momentum goes into the anchor.
 
-Surface. The anchor model is axisymmetric: each section is a cylinder of its outer diameter (the fins' envelope
-is the outer diameter of the fin sections, as the drag and added mass use it). The surface is the union of these
-coaxial cylinders (:func:`anchor_shape` merges neighbours of equal radius), closed by the tip face, the back end
-face and the annular steps between sections of different radius. In the anchor's frame a point has the axial
-coordinate a = (x - r_G) . e (+ towards the tip, as ``anchor.py``) and the radius rho from the axis, with the
+Surface. The anchor model is axisymmetric: each section is a cylinder of its outer diameter (the fins' envelope is
+the outer diameter of the fin sections, as the drag and added mass use it). The surface is the union of these
+coaxial cylinders (``contact_setup.anchor_shape`` merges neighbours of equal radius), closed by the tip face, the
+back end face and the annular steps between sections of different radius. In the anchor's frame a point has the
+axial coordinate a = (x - r_G) . e (+ towards the tip, as ``anchor.py``) and the radius rho from the axis, with the
 radial unit vector u. :func:`surface_distance` gives the signed distance sd (negative inside), its gradient, the
-outward normal n, and its Hessian H = dn/dx (zero on the faces, (I - e e^T - u u^T) / rho on the shaft, that
-plus the rim's own curvature outside a rim). The closest surface point is x - sd n. Inside, the depth is the
-distance to the nearest face or shaft of the cylinders that contain the point (ends covered by a neighbour at
-least as wide are not faces); it is exact for a single cylinder and underestimates the depth only within a
-penetration of an inner step's rim.
+outward normal n, and its Hessian H = dn/dx (zero on the faces, (I - e e^T - u u^T) / rho on the shaft, that plus
+the rim's own curvature outside a rim). The closest surface point is x - sd n. Inside, the depth is the distance to
+the nearest face or shaft of the cylinders that contain the point (ends covered by a neighbour at least as wide are
+not faces); it is exact for a single cylinder and underestimates the depth only within a penetration of an inner
+step's rim.
 
 Law. A free node of mass m inside the surface (depth d = -sd > 0), with velocity w = v - v_b relative to the body
 point at the node (v_b = v_G + omega x (x - r_G)), feels
@@ -44,20 +44,12 @@ normal, the body's rotation and the friction's dependence on the normal force; c
 differences), for the implicit step (which takes their symmetric part) and the static solver. The body's state
 is held fixed: the anchor is explicit in the implicit step.
 
-Parameters (:func:`contact_parameters`, slots ``CF_*`` of ``layout``): the stiffness k is chosen so that a node
-of the chain meeting the surface at the characteristic speed v_c penetrates ``penetration_m`` at most (peak
-penetration of the damped oscillator: v_c P(zeta) / omega with omega = sqrt(k / m) and P(1) = 1/e), and never
-above ``axial_fraction`` (0.1) times 4 EA / l, the stiffness that would put the node's contact frequency on the
-segment's axial mode 2 sqrt(EA / (m l)): the fastest mode of the model, which sets the explicit step, then rises
-by at most 5 %, inside the step's safety factor (0.9). For the 142 mm chain in 1 m segments (m = 442 kg, EA =
-1.74e9 N) at v_c = 15 m/s and 1 cm: k = 1.35e8 N/m (omega = 552 rad/s, 2 % of 4 EA / l), and 4.4 mm at 6 m/s.
+The numbers (stiffness, restitution, friction) and the shape are chosen in ``physics/contact_setup.py``.
 """
 
 from __future__ import annotations
 
 import math
-
-import numpy as np
 
 from moor_env.physics._jit import jit
 from moor_env.physics.layout import (
@@ -66,9 +58,6 @@ from moor_env.physics.layout import (
     BS_POS,
     BS_VEL,
     CF_MU,
-    CF_ON,
-    CF_RESTITUTION,
-    CF_SPEED,
     CF_STICK_SPEED,
     CF_STIFFNESS,
     CF_ZETA,
@@ -77,8 +66,6 @@ from moor_env.physics.layout import (
     CS_FRONT,
     CS_FRONT_INNER,
     CS_RADIUS,
-    N_CONTACT_F,
-    N_CONTACT_SHAPE,
 )
 
 # features of the surface nearest to a point
@@ -86,110 +73,6 @@ FEATURE_SHAFT = 0
 FEATURE_FRONT = 1
 FEATURE_BACK = 2
 FEATURE_RIM = 3
-
-RESTITUTION = 0.0  # a chain landing on the anchor piles up: its links collapse onto each other, it does not bounce
-FRICTION_COEFFICIENT = 0.3  # wet steel on steel
-STICK_SPEED_M_S = 0.05  # as the seabed's default friction velocity
-PENETRATION_M = 0.01  # peak penetration of a chain node at the characteristic speed
-AXIAL_FRACTION = 0.1  # stiffness cap as a fraction of 4 EA / l (the segment's axial mode)
-
-
-def anchor_shape(section_lengths_m, section_diameters_m, s_tip_m: float) -> np.ndarray:
-    """The anchor's surface as coaxial cylinders (rows of ``CS_*`` columns), front (tip) to back.
-
-    Parameters
-    ----------
-    section_lengths_m, section_diameters_m : sequence of float
-        Length and outer diameter of each section, listed from the tip backwards (as the anchor config).
-    s_tip_m : float
-        Axial coordinate of the tip from the COG (+ towards the tip) [m].
-    """
-    rows: list[list[float]] = []
-    front = s_tip_m
-    for length, diameter in zip(section_lengths_m, section_diameters_m, strict=True):
-        back = front - length
-        radius = 0.5 * diameter
-        if rows and rows[-1][CS_RADIUS] == radius:
-            rows[-1][CS_BACK] = back
-        else:
-            rows.append([front, back, radius, 0.0, 0.0])
-        front = back
-    for i in range(len(rows) - 1):
-        # where two cylinders meet, the wider one's end is an annulus outside the narrower one's radius; the
-        # narrower one's end is covered (its inner radius is its own radius: no face)
-        narrow = min(rows[i][CS_RADIUS], rows[i + 1][CS_RADIUS])
-        rows[i][CS_BACK_INNER] = narrow
-        rows[i + 1][CS_FRONT_INNER] = narrow
-    shape = np.zeros((len(rows), N_CONTACT_SHAPE))
-    shape[:] = rows
-    return shape
-
-
-def zeta_from_restitution(restitution: float) -> float:
-    """Damping ratio of a linear spring-dashpot whose restitution is ``restitution`` (1 at 0: critical)."""
-    if not 0.0 <= restitution <= 1.0:
-        raise ValueError(f"restitution {restitution} outside [0, 1]")
-    if restitution == 0.0:
-        return 1.0
-    log_e = math.log(restitution)
-    return -log_e / math.sqrt(math.pi**2 + log_e**2)
-
-
-def peak_penetration_factor(zeta: float) -> float:
-    """P(zeta): the peak penetration of a node meeting the surface at speed v is v P / omega."""
-    if zeta >= 1.0:
-        # overdamped: the peak of (exp(r1 t) - exp(r2 t)) / (r1 - r2) times omega
-        if zeta == 1.0:
-            return math.exp(-1.0)
-        s = math.sqrt(zeta * zeta - 1.0)
-        r1, r2 = -zeta + s, -zeta - s
-        t = math.log(r2 / r1) / (r1 - r2)
-        return (math.exp(r1 * t) - math.exp(r2 * t)) / (r1 - r2)
-    s = math.sqrt(1.0 - zeta * zeta)
-    return math.exp(-zeta / s * math.atan2(s, zeta))
-
-
-def contact_parameters(ea_n: float, segment_m: float, node_mass_kg: float, contact_speed_m_s: float,
-                       restitution: float = RESTITUTION, friction_coefficient: float = FRICTION_COEFFICIENT,
-                       stick_speed_m_s: float = STICK_SPEED_M_S, penetration_m: float = PENETRATION_M,
-                       axial_fraction: float = AXIAL_FRACTION, on: bool = True) -> np.ndarray:
-    """The ``contact_f`` slots for the line that meets the anchor (the chain), as the module docstring derives.
-
-    Parameters
-    ----------
-    ea_n, segment_m, node_mass_kg : float
-        Axial stiffness [N], segment length [m] and node mass [kg] of the line's finest segments near the anchor.
-    contact_speed_m_s : float
-        Characteristic speed at which its nodes meet the anchor's surface [m/s].
-    restitution, friction_coefficient, stick_speed_m_s : float
-        Normal restitution, Coulomb coefficient, and the sliding speed of the regularised stick zone [m/s].
-    penetration_m : float
-        Peak penetration of a node meeting the surface at ``contact_speed_m_s`` [m].
-    axial_fraction : float
-        Cap of the stiffness as a fraction of 4 EA / l.
-    on : bool
-        Whether the kernels apply the contact.
-    """
-    for name, value in (("ea_n", ea_n), ("segment_m", segment_m), ("node_mass_kg", node_mass_kg),
-                        ("contact_speed_m_s", contact_speed_m_s), ("stick_speed_m_s", stick_speed_m_s),
-                        ("penetration_m", penetration_m), ("axial_fraction", axial_fraction)):
-        if not value > 0.0:
-            raise ValueError(f"{name} {value} must be positive")
-    if friction_coefficient < 0.0:
-        raise ValueError(f"friction_coefficient {friction_coefficient} must not be negative")
-    zeta = zeta_from_restitution(restitution)
-    omega = contact_speed_m_s * peak_penetration_factor(zeta) / penetration_m
-    stiffness = min(node_mass_kg * omega * omega, axial_fraction * 4.0 * ea_n / segment_m)
-    out = np.zeros(N_CONTACT_F)
-    out[CF_ON] = 1.0 if on else 0.0
-    out[CF_STIFFNESS] = stiffness
-    out[CF_RESTITUTION] = restitution
-    out[CF_ZETA] = zeta
-    out[CF_SPEED] = contact_speed_m_s
-    out[CF_MU] = friction_coefficient
-    out[CF_STICK_SPEED] = stick_speed_m_s
-    return out
-
 
 @jit
 def _from_cog(px, py, pz, body_state):

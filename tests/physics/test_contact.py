@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from moor_env.physics import contact as C
+from moor_env.physics import contact_setup as CS
 from moor_env.physics import layout as L
 
 MASS_KG = 442.0
@@ -22,7 +23,7 @@ S_TIP_M = 6.381
 LENGTH_M = 13.0
 S_BACK_M = S_TIP_M - LENGTH_M
 RADIUS_M = 0.6
-SHAPE = C.anchor_shape([0.1, 0.2838, 7.6162, 4.9, 0.1], [1.2] * 5, S_TIP_M)
+SHAPE = CS.anchor_shape([0.1, 0.2838, 7.6162, 4.9, 0.1], [1.2] * 5, S_TIP_M)
 NO_JAC = np.zeros((0, 3, 3))
 
 
@@ -40,7 +41,7 @@ def body(axis=(0.0, 0.0, -1.0), pos=(0.0, 0.0, 0.0), vel=(0.0, 0.0, 0.0), omega=
 
 
 def params(restitution=0.0, mu=0.3, speed=15.0, mass=MASS_KG) -> np.ndarray:
-    return C.contact_parameters(EA_N, 1.0, mass, speed, restitution=restitution, friction_coefficient=mu)
+    return CS.contact_parameters(EA_N, 1.0, mass, speed, restitution=restitution, friction_coefficient=mu)
 
 
 def point(state, a, rho, angle=0.3) -> np.ndarray:
@@ -63,7 +64,7 @@ def test_parameters_as_documented():
     assert cf[L.CF_ZETA] == 1.0
     assert params(speed=100.0)[L.CF_STIFFNESS] == pytest.approx(0.1 * 4.0 * EA_N, rel=1e-12)
     for e in (0.1, 0.5, 0.9):
-        zeta = C.zeta_from_restitution(e)
+        zeta = CS.zeta_from_restitution(e)
         assert math.exp(-zeta * math.pi / math.sqrt(1.0 - zeta * zeta)) == pytest.approx(e, rel=1e-12)
     with pytest.raises(ValueError, match="contact_speed_m_s"):
         params(speed=0.0)
@@ -101,7 +102,7 @@ def test_signed_distance_on_a_stepped_body():
     sections merged): the step facing the tip is an annulus from 0.4 to 0.6 m; just behind it, inside the nose's
     radius, the nearest surface is the step's inner rim (the nose's end is covered); deeper, the nose's shaft.
     Tolerance 1e-12 m."""
-    shape = C.anchor_shape([2.0, 3.0, 3.0], [0.8, 1.2, 1.2], 4.0)
+    shape = CS.anchor_shape([2.0, 3.0, 3.0], [0.8, 1.2, 1.2], 4.0)
     assert shape.shape[0] == 2
     assert list(shape[:, L.CS_FRONT_INNER]) == [0.0, 0.4]
     assert list(shape[:, L.CS_BACK_INNER]) == [0.4, 0.0]
@@ -131,7 +132,7 @@ def test_normal_derivative_matches_finite_differences():
                    (S_BACK_M + 0.01, 0.2)):
         hess, fd = _hessian_and_differences(point(state, a, rho, angle=1.1), state, SHAPE)
         assert np.abs(hess - fd).max() <= 1e-6 / RADIUS_M
-    stepped = C.anchor_shape([2.0, 6.0], [0.8, 1.2], 4.0)
+    stepped = CS.anchor_shape([2.0, 6.0], [0.8, 1.2], 4.0)
     for a, rho in ((1.9, 0.3), (4.1, 0.5)):  # inside near the step's inner rim, outside the nose's rim
         hess, fd = _hessian_and_differences(point(state, a, rho, angle=0.4), state, stepped)
         assert np.abs(hess - fd).max() <= 1e-6 * np.abs(hess).max()
@@ -400,3 +401,28 @@ def test_no_force_outside_and_far_away():
     for x in (point(state, S_BACK_M - 1e-3, 0.3), point(state, -2.0, RADIUS_M + 1e-3), np.array([50.0, 0, 0])):
         assert C.node_contact(*x, 0.0, 0.0, -5.0, MASS_KG, state, SHAPE, cf, jac) == (0.0, 0.0, 0.0, 0.0)
         assert not jac.any()
+
+
+def _catch_up(cd_tangential):
+    """The seed's DPA (1-DOF: C = 1.10 on 1.131 m^2, 70.1 t net, 85.2 t with flooded water, 68.5 m) and its
+    142 mm chain (442 kg/m, 384.3 kg/m net, D = 0.2008 m) with the given tangential drag."""
+    rho, g = 1025.0, 9.81
+    return CS.chain_catch_up(68.5, 85.2e3, 70.1e3 * g, 0.5 * rho * 1.10 * 1.131, 442.0, 384.3 * g,
+                             0.5 * rho * cd_tangential * math.pi * 0.2008)
+
+
+def test_catch_up_of_the_seeds_chain():
+    """Reference: seed 003's 1-DOF fall of the DPA alone, 26.3 m/s at 4.48 s (the extract's closed form, within
+    0.05 m/s and 0.02 s), the chain's lengthwise terminal speed sqrt(w / (1/2 rho C_D,T pi D)) = 41.1 m/s
+    (0.1 m/s); with C_D,T = 0.0069 the freely falling chain gains metres on the anchor (the contact is needed,
+    at 41.1 - 26.3 = 14.8 m/s), with the DNV 0.4456 (terminal 5.1 m/s) it falls behind (no contact)."""
+    seed = _catch_up(0.0069)
+    assert seed.anchor_speed_m_s == pytest.approx(26.3, abs=0.05)
+    assert seed.anchor_touchdown_s == pytest.approx(4.48, abs=0.02)
+    assert seed.chain_terminal_m_s == pytest.approx(41.1, abs=0.1)
+    assert seed.gain_m > 5.0 and seed.needed(1.0)
+    assert seed.contact_speed_m_s == pytest.approx(14.8, abs=0.1)
+    dnv = _catch_up(0.4456)
+    assert dnv.chain_terminal_m_s == pytest.approx(5.1, abs=0.1)
+    assert not dnv.needed(1.0) and not dnv.needed(0.25)
+    assert dnv.contact_speed_m_s == CS.MIN_CONTACT_SPEED_M_S
