@@ -51,6 +51,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from moor_env.physics._jit import jit
 from moor_env.physics.layout import (
     BS_AXIS,
@@ -61,11 +63,18 @@ from moor_env.physics.layout import (
     CF_STICK_SPEED,
     CF_STIFFNESS,
     CF_ZETA,
+    CO_DEPTH,
+    CO_FORCE,
+    CO_NODES,
+    CO_PEAK_DEPTH,
+    CO_PEAK_FORCE,
     CS_BACK,
     CS_BACK_INNER,
     CS_FRONT,
     CS_FRONT_INNER,
     CS_RADIUS,
+    NI_KIND,
+    NODE_FREE,
 )
 
 # features of the surface nearest to a point
@@ -346,13 +355,63 @@ def _contact_jacobian(jac, nx, ny, nz, hxx, hyy, hzz, hxy, hxz, hyz, ox, oy, oz,
 
 
 @jit
+def _reaction_moment(body_state, px, py, pz, fx, fy, fz):
+    """Moment about the COG of the reaction -F at the node: (x - r_G) x (-F)."""
+    rx, ry, rz, _ = _from_cog(px, py, pz, body_state)
+    return rz * fy - ry * fz, rx * fz - rz * fx, ry * fx - rx * fy
+
+
+@jit
 def add_contact_reaction(load, body_state, px, py, pz, fx, fy, fz):
     """Add the reaction of a contact force (fx, fy, fz) on a node at p to the body's ``load`` (F [N], M about
     the COG [N m]): -F at the node."""
-    rx, ry, rz, _ = _from_cog(px, py, pz, body_state)
+    mx, my, mz = _reaction_moment(body_state, px, py, pz, fx, fy, fz)
     load[0] -= fx
     load[1] -= fy
     load[2] -= fz
-    load[3] -= ry * fz - rz * fy
-    load[4] -= rz * fx - rx * fz
-    load[5] -= rx * fy - ry * fx
+    load[3] += mx
+    load[4] += my
+    load[5] += mz
+
+
+@jit
+def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_state, shape, contact_f, contact_out):
+    """Add the contact force of every free node inside the anchor to ``node_force`` and fill ``contact_out``
+    (``CO_*``); returns the reaction on the anchor (F [N], M about the COG [N m]) as six floats.
+
+    The node's mass in the damping is its structural mass (``node_mass``, welded parts included); its added mass
+    (a few % for chain) only makes the contact slightly softer and less damped than chosen.
+    """
+    lx = ly = lz = mx = my = mz = 0.0
+    count = 0
+    deepest = 0.0
+    jac = np.zeros((0, 3, 3))
+    for n in range(node_i.shape[0]):
+        if node_i[n, NI_KIND] != NODE_FREE:
+            continue
+        px = node_pos[n, 0]
+        py = node_pos[n, 1]
+        pz = node_pos[n, 2]
+        depth, fx, fy, fz = node_contact(px, py, pz, node_vel[n, 0], node_vel[n, 1], node_vel[n, 2], node_mass[n],
+                                         body_state, shape, contact_f, jac)
+        if depth == 0.0:
+            continue
+        count += 1
+        deepest = max(deepest, depth)
+        node_force[n, 0] += fx
+        node_force[n, 1] += fy
+        node_force[n, 2] += fz
+        lx -= fx
+        ly -= fy
+        lz -= fz
+        ax, ay, az = _reaction_moment(body_state, px, py, pz, fx, fy, fz)
+        mx += ax
+        my += ay
+        mz += az
+    force = math.sqrt(lx * lx + ly * ly + lz * lz)
+    contact_out[CO_FORCE] = force
+    contact_out[CO_PEAK_FORCE] = max(contact_out[CO_PEAK_FORCE], force)
+    contact_out[CO_NODES] = count
+    contact_out[CO_DEPTH] = deepest
+    contact_out[CO_PEAK_DEPTH] = max(contact_out[CO_PEAK_DEPTH], deepest)
+    return lx, ly, lz, mx, my, mz
