@@ -1,21 +1,12 @@
-"""Contact between line nodes and the anchor's surface: geometry, penalty law with friction, and its Jacobians.
+"""Contact between line nodes and the anchor's surface: the penalty law with friction, its Jacobians, the loads.
 
 Why: lengthwise a chain with the seed's tangential drag falls faster than the anchor (seed 003, Landhaug 2015,
 *Dynamic Simulation of Dart Anchor Installation*, chapter 8: C_D,T = 0.0069), so the vertical chain catches up
 with the anchor's back end during the fall. Without contact it would pass into the body; with it, it lands on
 the back end, rests there or slides off along the shaft, and its momentum goes into the anchor.
 
-Surface. The anchor model is axisymmetric: each section is a cylinder of its outer diameter (the fins' envelope is
-the outer diameter of the fin sections, as the drag and added mass use it). The surface is the union of these
-coaxial cylinders (``contact_setup.anchor_shape`` merges neighbours of equal radius), closed by the tip face, the
-back end face and the annular steps between sections of different radius. In the anchor's frame a point has the
-axial coordinate a = (x - r_G) . e (+ towards the tip, as ``anchor.py``) and the radius rho from the axis, with the
-radial unit vector u. :func:`surface_distance` gives the signed distance sd (negative inside), its gradient, the
-outward normal n, and its Hessian H = dn/dx (zero on the faces, (I - e e^T - u u^T) / rho on the shaft, that plus
-the rim's own curvature outside a rim). The closest surface point is x - sd n. Inside, the depth is the distance to
-the nearest face or shaft of the cylinders that contain the point (ends covered by a neighbour at least as wide are
-not faces); it is exact for a single cylinder and underestimates the depth only within a penetration of an inner
-step's rim.
+Surface (``physics/anchor_surface.py``): the union of the coaxial cylinders of the anchor's sections, its signed
+distance sd (negative inside), outward normal n and n's derivative H.
 
 Law. A free node of mass m inside the surface (depth d = -sd > 0), with velocity w = v - v_b relative to the body
 point at the node (v_b = v_G + omega x (x - r_G)), feels
@@ -54,10 +45,9 @@ import math
 import numpy as np
 
 from moor_env.physics._jit import jit
+from moor_env.physics.anchor_surface import from_cog, surface_distance, within_reach
 from moor_env.physics.layout import (
-    BS_AXIS,
     BS_OMEGA,
-    BS_POS,
     BS_VEL,
     CF_MU,
     CF_STICK_SPEED,
@@ -68,167 +58,12 @@ from moor_env.physics.layout import (
     CO_NODES,
     CO_PEAK_DEPTH,
     CO_PEAK_FORCE,
-    CS_BACK,
-    CS_BACK_INNER,
-    CS_FRONT,
-    CS_FRONT_INNER,
-    CS_RADIUS,
     NI_KIND,
     NODE_FREE,
 )
 
+
 # features of the surface nearest to a point
-FEATURE_SHAFT = 0
-FEATURE_FRONT = 1
-FEATURE_BACK = 2
-FEATURE_RIM = 3
-
-@jit
-def _from_cog(px, py, pz, body_state):
-    """The point relative to the anchor's COG, r = x - r_G, and its axial coordinate a = r . e."""
-    rx = px - body_state[BS_POS]
-    ry = py - body_state[BS_POS + 1]
-    rz = pz - body_state[BS_POS + 2]
-    return rx, ry, rz, rx * body_state[BS_AXIS] + ry * body_state[BS_AXIS + 1] + rz * body_state[BS_AXIS + 2]
-
-
-@jit
-def _anchor_frame(px, py, pz, body_state):
-    """Axial coordinate a, radius rho, radial unit vector u and axis e of a point in the anchor's frame."""
-    ex = body_state[BS_AXIS]
-    ey = body_state[BS_AXIS + 1]
-    ez = body_state[BS_AXIS + 2]
-    rx, ry, rz, a = _from_cog(px, py, pz, body_state)
-    qx = rx - a * ex
-    qy = ry - a * ey
-    qz = rz - a * ez
-    rho = math.sqrt(qx * qx + qy * qy + qz * qz)
-    if rho > 0.0:
-        return a, rho, qx / rho, qy / rho, qz / rho, ex, ey, ez
-    # on the axis: any radial direction (the shaft's normal is then undefined, its depth the full radius)
-    if abs(ex) < 0.9:
-        qx, qy, qz = 0.0, -ez, ey
-    else:
-        qx, qy, qz = ez, 0.0, -ex
-    norm = math.sqrt(qx * qx + qy * qy + qz * qz)
-    return a, 0.0, qx / norm, qy / norm, qz / norm, ex, ey, ez
-
-
-@jit
-def _end_depth(gap, inner, rho):
-    """Depth below an end face ``gap`` [m] inside it (annulus from radius ``inner`` out); inside the annulus'
-    inner radius the nearest point of the face is its inner rim. Returns (depth, e-part, u-part of the normal
-    direction from the point to the face, or to the rim)."""
-    if rho >= inner:
-        return gap, 1.0, 0.0
-    dr = inner - rho
-    depth = math.sqrt(gap * gap + dr * dr)
-    return depth, gap / depth, dr / depth
-
-
-@jit
-def surface_distance(px, py, pz, body_state, shape):
-    """Signed distance of a point to the anchor's surface and its derivatives.
-
-    Returns
-    -------
-    sd : float
-        Signed distance [m], negative inside.
-    nx, ny, nz : float
-        Outward normal (the gradient of sd); the closest surface point is x - sd n.
-    hxx, hyy, hzz, hxy, hxz, hyz : float
-        The Hessian of sd (dn/dx, symmetric) [1/m].
-    feature : int
-        ``FEATURE_SHAFT``, ``FEATURE_FRONT``, ``FEATURE_BACK`` (end faces and steps) or ``FEATURE_RIM`` (an edge
-        of a face: outside a convex rim, or inside near the inner rim of a step).
-    """
-    a, rho, ux, uy, uz, ex, ey, ez = _anchor_frame(px, py, pz, body_state)
-    depth = -math.inf
-    feature = FEATURE_SHAFT
-    ca = 0.0  # the normal's components along e and u, and the distance to a rim
-    cr = 1.0
-    dist = 0.0
-    out = math.inf
-    for i in range(shape.shape[0]):
-        front = shape[i, CS_FRONT]
-        back = shape[i, CS_BACK]
-        radius = shape[i, CS_RADIUS]
-        if back <= a <= front and rho <= radius:
-            d = radius - rho
-            f = FEATURE_SHAFT
-            fa = 0.0
-            fr = 1.0
-            df, pa, pr = _end_depth(front - a, shape[i, CS_FRONT_INNER], rho)
-            if df < d:
-                d = df
-                f = FEATURE_FRONT if pr == 0.0 else FEATURE_RIM
-                fa = pa
-                fr = pr
-            db, pa, pr = _end_depth(a - back, shape[i, CS_BACK_INNER], rho)
-            if db < d:
-                d = db
-                f = FEATURE_BACK if pr == 0.0 else FEATURE_RIM
-                fa = -pa
-                fr = pr
-            if d > depth:
-                depth = d
-                feature = f
-                ca = fa
-                cr = fr
-                dist = d
-        elif depth == -math.inf:
-            da = a - back if a < back else (a - front if a > front else 0.0)
-            dr = rho - radius if rho > radius else 0.0
-            d = math.sqrt(da * da + dr * dr)
-            if d < out:
-                out = d
-                if dr > 0.0 and da != 0.0:
-                    feature = FEATURE_RIM
-                elif dr > 0.0:
-                    feature = FEATURE_SHAFT
-                else:
-                    feature = FEATURE_FRONT if da > 0.0 else FEATURE_BACK
-                ca = da / d
-                cr = dr / d
-                dist = d
-    sd = out if depth == -math.inf else -depth
-    nx = ca * ex + cr * ux
-    ny = ca * ey + cr * uy
-    nz = ca * ez + cr * uz
-    if feature == FEATURE_FRONT or feature == FEATURE_BACK:
-        return sd, nx, ny, nz, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, feature
-    # the turning of the radial direction, n_u (I - e e^T - u u^T) / rho with I - e e^T - u u^T = t t^T,
-    # t = e x u; at a rim also the turning in the (e, u) plane, sign(sd) (e e^T + u u^T - n n^T) / dist
-    kt = cr / rho if rho > 0.0 else 0.0
-    tx = ey * uz - ez * uy
-    ty = ez * ux - ex * uz
-    tz = ex * uy - ey * ux
-    kp = 0.0
-    if feature == FEATURE_RIM:
-        kp = 1.0 / dist if sd > 0.0 else -1.0 / dist
-    return (sd, nx, ny, nz,
-            kp * (ex * ex + ux * ux - nx * nx) + kt * tx * tx,
-            kp * (ey * ey + uy * uy - ny * ny) + kt * ty * ty,
-            kp * (ez * ez + uz * uz - nz * nz) + kt * tz * tz,
-            kp * (ex * ey + ux * uy - nx * ny) + kt * tx * ty,
-            kp * (ex * ez + ux * uz - nx * nz) + kt * tx * tz,
-            kp * (ey * ez + uy * uz - ny * nz) + kt * ty * tz,
-            feature)
-
-
-@jit
-def within_reach(px, py, pz, body_state, shape):
-    """Whether a point lies inside the cylinder that bounds the anchor (cheap test before the contact law)."""
-    rx, ry, rz, a = _from_cog(px, py, pz, body_state)
-    if a > shape[0, CS_FRONT] or a < shape[shape.shape[0] - 1, CS_BACK]:
-        return False
-    rho2 = rx * rx + ry * ry + rz * rz - a * a
-    for i in range(shape.shape[0]):
-        if rho2 <= shape[i, CS_RADIUS] ** 2:
-            return True
-    return False
-
-
 @jit
 def node_contact(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f, jac):
     """Contact force on a node of mass ``mass_kg`` at (p, v) from the anchor (module docstring).
@@ -262,7 +97,7 @@ def node_contact(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f, 
     ox = body_state[BS_OMEGA]
     oy = body_state[BS_OMEGA + 1]
     oz = body_state[BS_OMEGA + 2]
-    rx, ry, rz, _ = _from_cog(px, py, pz, body_state)
+    rx, ry, rz, _ = from_cog(px, py, pz, body_state)
     wx = vx - body_state[BS_VEL] - (oy * rz - oz * ry)
     wy = vy - body_state[BS_VEL + 1] - (oz * rx - ox * rz)
     wz = vz - body_state[BS_VEL + 2] - (ox * ry - oy * rx)
@@ -357,7 +192,7 @@ def _contact_jacobian(jac, nx, ny, nz, hxx, hyy, hzz, hxy, hxz, hyz, ox, oy, oz,
 @jit
 def _reaction_moment(body_state, px, py, pz, fx, fy, fz):
     """Moment about the COG of the reaction -F at the node: (x - r_G) x (-F)."""
-    rx, ry, rz, _ = _from_cog(px, py, pz, body_state)
+    rx, ry, rz, _ = from_cog(px, py, pz, body_state)
     return rz * fy - ry * fz, rx * fz - rz * fx, ry * fx - rx * fy
 
 

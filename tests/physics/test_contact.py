@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 
+from moor_env.physics import anchor_surface as S
 from moor_env.physics import contact as C
 from moor_env.physics import contact_setup as CS
 from moor_env.physics import layout as L
@@ -77,24 +78,24 @@ def test_signed_distance_on_each_patch():
     state = body(axis=(0.3, -0.2, -1.0), pos=(5.0, -3.0, -400.0))
     e = state[L.BS_AXIS:L.BS_AXIS + 3]
     cases = [  # (a, rho, sd, feature, outward normal along e)
-        (S_BACK_M - 0.25, 0.3, 0.25, C.FEATURE_BACK, -1.0),
-        (S_BACK_M + 0.02, 0.3, -0.02, C.FEATURE_BACK, -1.0),
-        (S_TIP_M + 0.4, 0.1, 0.4, C.FEATURE_FRONT, 1.0),
-        (S_TIP_M - 0.03, 0.2, -0.03, C.FEATURE_FRONT, 1.0),
-        (-1.0, RADIUS_M + 0.2, 0.2, C.FEATURE_SHAFT, 0.0),
-        (-5.0, RADIUS_M - 0.04, -0.04, C.FEATURE_SHAFT, 0.0),
-        (S_BACK_M - 0.3, RADIUS_M + 0.4, 0.5, C.FEATURE_RIM, -0.6),
+        (S_BACK_M - 0.25, 0.3, 0.25, S.FEATURE_BACK, -1.0),
+        (S_BACK_M + 0.02, 0.3, -0.02, S.FEATURE_BACK, -1.0),
+        (S_TIP_M + 0.4, 0.1, 0.4, S.FEATURE_FRONT, 1.0),
+        (S_TIP_M - 0.03, 0.2, -0.03, S.FEATURE_FRONT, 1.0),
+        (-1.0, RADIUS_M + 0.2, 0.2, S.FEATURE_SHAFT, 0.0),
+        (-5.0, RADIUS_M - 0.04, -0.04, S.FEATURE_SHAFT, 0.0),
+        (S_BACK_M - 0.3, RADIUS_M + 0.4, 0.5, S.FEATURE_RIM, -0.6),
     ]
     for a, rho, sd_ref, feature_ref, n_along_e in cases:
         x = point(state, a, rho)
-        sd, nx, ny, nz, *_hess, feature = C.surface_distance(*x, state, SHAPE)
+        sd, nx, ny, nz, *_hess, feature = S.surface_distance(*x, state, SHAPE)
         n = np.array([nx, ny, nz])
         assert sd == pytest.approx(sd_ref, abs=1e-12)
         assert feature == feature_ref
         assert n @ e == pytest.approx(n_along_e, abs=1e-12)
         assert np.linalg.norm(n) == pytest.approx(1.0, abs=1e-12)
         closest = x - sd * n
-        assert C.surface_distance(*closest, state, SHAPE)[0] == pytest.approx(0.0, abs=1e-12)
+        assert S.surface_distance(*closest, state, SHAPE)[0] == pytest.approx(0.0, abs=1e-12)
 
 
 def test_signed_distance_on_a_stepped_body():
@@ -109,19 +110,19 @@ def test_signed_distance_on_a_stepped_body():
     state = body(axis=(0.0, 0.0, -1.0))
     step = 2.0  # the step's axial coordinate
     cases = [  # (a, rho, sd, feature)
-        (step + 0.1, 0.55, 0.1, C.FEATURE_FRONT),
-        (step + 0.1, 0.45, 0.05, C.FEATURE_SHAFT),
-        (step - 0.02, 0.5, -0.02, C.FEATURE_FRONT),
-        (step - 0.01, 0.35, -math.hypot(0.01, 0.05), C.FEATURE_RIM),
-        (step + 0.3, 0.35, -0.05, C.FEATURE_SHAFT),
-        (step - 0.2, 0.1, -math.hypot(0.2, 0.3), C.FEATURE_RIM),
+        (step + 0.1, 0.55, 0.1, S.FEATURE_FRONT),
+        (step + 0.1, 0.45, 0.05, S.FEATURE_SHAFT),
+        (step - 0.02, 0.5, -0.02, S.FEATURE_FRONT),
+        (step - 0.01, 0.35, -math.hypot(0.01, 0.05), S.FEATURE_RIM),
+        (step + 0.3, 0.35, -0.05, S.FEATURE_SHAFT),
+        (step - 0.2, 0.1, -math.hypot(0.2, 0.3), S.FEATURE_RIM),
     ]
     for a, rho, sd_ref, feature_ref in cases:
         x = point(state, a, rho)
-        sd, nx, ny, nz, *_hess, feature = C.surface_distance(*x, state, shape)
+        sd, nx, ny, nz, *_hess, feature = S.surface_distance(*x, state, shape)
         assert (sd, feature) == (pytest.approx(sd_ref, abs=1e-12), feature_ref)
         n = np.array([nx, ny, nz])
-        assert C.surface_distance(*(x - sd * n), state, shape)[0] == pytest.approx(0.0, abs=1e-12)
+        assert S.surface_distance(*(x - sd * n), state, shape)[0] == pytest.approx(0.0, abs=1e-12)
 
 
 def test_normal_derivative_matches_finite_differences():
@@ -140,13 +141,13 @@ def test_normal_derivative_matches_finite_differences():
 
 def _hessian_and_differences(x, state, shape):
     """dn/dx of :func:`surface_distance` at x and its central differences (step 1e-6 m)."""
-    hxx, hyy, hzz, hxy, hxz, hyz = C.surface_distance(*x, state, shape)[4:10]
+    hxx, hyy, hzz, hxy, hxz, hyz = S.surface_distance(*x, state, shape)[4:10]
     fd = np.zeros((3, 3))
     for j in range(3):
         d = np.zeros(3)
         d[j] = 1e-6
-        fd[:, j] = (np.array(C.surface_distance(*(x + d), state, shape)[1:4])
-                    - np.array(C.surface_distance(*(x - d), state, shape)[1:4])) / 2e-6
+        fd[:, j] = (np.array(S.surface_distance(*(x + d), state, shape)[1:4])
+                    - np.array(S.surface_distance(*(x - d), state, shape)[1:4])) / 2e-6
     return np.array([[hxx, hxy, hxz], [hxy, hyy, hyz], [hxz, hyz, hzz]]), fd
 
 
@@ -328,7 +329,7 @@ def test_contact_power_is_never_positive():
         depth, fx, fy, fz = C.node_contact(*x, *v, MASS_KG, state, SHAPE, cf, NO_JAC)
         if depth == 0.0:
             continue
-        n = np.array(C.surface_distance(*x, state, SHAPE)[1:4])
+        n = np.array(S.surface_distance(*x, state, SHAPE)[1:4])
         r = x - state[L.BS_POS:L.BS_POS + 3]
         w = v - state[L.BS_VEL:L.BS_VEL + 3] - np.cross(state[L.BS_OMEGA:L.BS_OMEGA + 3], r)
         f = np.array([fx, fy, fz])

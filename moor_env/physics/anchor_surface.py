@@ -1,0 +1,197 @@
+"""The anchor's surface for the line-anchor contact (``physics/contact.py``): signed distance, normal, curvature.
+
+The anchor model is axisymmetric: each section is a cylinder of its outer diameter (the fins' envelope is the
+outer diameter of the fin sections, as the drag and added mass use it). The surface is the union of these coaxial
+cylinders (``contact_setup.anchor_shape`` merges neighbours of equal radius), closed by the tip face, the back end
+face and the annular steps between sections of different radius. In the anchor's frame a point has the axial
+coordinate a = (x - r_G) . e (+ towards the tip, as ``anchor.py``) and the radius rho from the axis, with the
+radial unit vector u. :func:`surface_distance` gives the signed distance sd (negative inside), its gradient, the
+outward normal n, and its Hessian H = dn/dx (zero on the faces, (I - e e^T - u u^T) / rho on the shaft, that plus
+the rim's own curvature outside a rim). The closest surface point is x - sd n. Inside, the depth is the distance
+to the nearest shaft, face or face edge of the cylinder that contains the point: a step's face is the annulus
+outside the narrower neighbour's radius (``contact_setup.anchor_shape`` records its inner radius), and inside that
+radius its nearest point is the annulus' inner rim.
+"""
+
+from __future__ import annotations
+
+import math
+
+from moor_env.physics._jit import jit
+from moor_env.physics.layout import (
+    BS_AXIS,
+    BS_POS,
+    CS_BACK,
+    CS_BACK_INNER,
+    CS_FRONT,
+    CS_FRONT_INNER,
+    CS_RADIUS,
+    SF_L0,
+    SI_A,
+    SI_B,
+)
+
+FEATURE_SHAFT = 0
+FEATURE_FRONT = 1
+FEATURE_BACK = 2
+FEATURE_RIM = 3
+
+@jit
+def from_cog(px, py, pz, body_state):
+    """The point relative to the anchor's COG, r = x - r_G [m], and its axial coordinate a = r . e [m]."""
+    rx = px - body_state[BS_POS]
+    ry = py - body_state[BS_POS + 1]
+    rz = pz - body_state[BS_POS + 2]
+    return rx, ry, rz, rx * body_state[BS_AXIS] + ry * body_state[BS_AXIS + 1] + rz * body_state[BS_AXIS + 2]
+
+
+@jit
+def _anchor_frame(px, py, pz, body_state):
+    """Axial coordinate a, radius rho, radial unit vector u and axis e of a point in the anchor's frame."""
+    ex = body_state[BS_AXIS]
+    ey = body_state[BS_AXIS + 1]
+    ez = body_state[BS_AXIS + 2]
+    rx, ry, rz, a = from_cog(px, py, pz, body_state)
+    qx = rx - a * ex
+    qy = ry - a * ey
+    qz = rz - a * ez
+    rho = math.sqrt(qx * qx + qy * qy + qz * qz)
+    if rho > 0.0:
+        return a, rho, qx / rho, qy / rho, qz / rho, ex, ey, ez
+    # on the axis: any radial direction (the shaft's normal is then undefined, its depth the full radius)
+    if abs(ex) < 0.9:
+        qx, qy, qz = 0.0, -ez, ey
+    else:
+        qx, qy, qz = ez, 0.0, -ex
+    norm = math.sqrt(qx * qx + qy * qy + qz * qz)
+    return a, 0.0, qx / norm, qy / norm, qz / norm, ex, ey, ez
+
+
+@jit
+def _end_depth(gap, inner, rho):
+    """Depth below an end face ``gap`` [m] inside it (annulus from radius ``inner`` out); inside the annulus'
+    inner radius the nearest point of the face is its inner rim. Returns (depth, e-part, u-part of the normal
+    direction from the point to the face, or to the rim)."""
+    if rho >= inner:
+        return gap, 1.0, 0.0
+    dr = inner - rho
+    depth = math.sqrt(gap * gap + dr * dr)
+    return depth, gap / depth, dr / depth
+
+
+@jit
+def surface_distance(px, py, pz, body_state, shape):
+    """Signed distance of a point to the anchor's surface and its derivatives.
+
+    Returns
+    -------
+    sd : float
+        Signed distance [m], negative inside.
+    nx, ny, nz : float
+        Outward normal (the gradient of sd); the closest surface point is x - sd n.
+    hxx, hyy, hzz, hxy, hxz, hyz : float
+        The Hessian of sd (dn/dx, symmetric) [1/m].
+    feature : int
+        ``FEATURE_SHAFT``, ``FEATURE_FRONT``, ``FEATURE_BACK`` (end faces and steps) or ``FEATURE_RIM`` (an edge
+        of a face: outside a convex rim, or inside near the inner rim of a step).
+    """
+    a, rho, ux, uy, uz, ex, ey, ez = _anchor_frame(px, py, pz, body_state)
+    depth = -math.inf
+    feature = FEATURE_SHAFT
+    ca = 0.0  # the normal's components along e and u, and the distance to a rim
+    cr = 1.0
+    dist = 0.0
+    out = math.inf
+    for i in range(shape.shape[0]):
+        front = shape[i, CS_FRONT]
+        back = shape[i, CS_BACK]
+        radius = shape[i, CS_RADIUS]
+        if back <= a <= front and rho <= radius:
+            d = radius - rho
+            f = FEATURE_SHAFT
+            fa = 0.0
+            fr = 1.0
+            df, pa, pr = _end_depth(front - a, shape[i, CS_FRONT_INNER], rho)
+            if df < d:
+                d = df
+                f = FEATURE_FRONT if pr == 0.0 else FEATURE_RIM
+                fa = pa
+                fr = pr
+            db, pa, pr = _end_depth(a - back, shape[i, CS_BACK_INNER], rho)
+            if db < d:
+                d = db
+                f = FEATURE_BACK if pr == 0.0 else FEATURE_RIM
+                fa = -pa
+                fr = pr
+            if d > depth:
+                depth = d
+                feature = f
+                ca = fa
+                cr = fr
+                dist = d
+        elif depth == -math.inf:
+            da = a - back if a < back else (a - front if a > front else 0.0)
+            dr = rho - radius if rho > radius else 0.0
+            d = math.sqrt(da * da + dr * dr)
+            if d < out:
+                out = d
+                if dr > 0.0 and da != 0.0:
+                    feature = FEATURE_RIM
+                elif dr > 0.0:
+                    feature = FEATURE_SHAFT
+                else:
+                    feature = FEATURE_FRONT if da > 0.0 else FEATURE_BACK
+                ca = da / d
+                cr = dr / d
+                dist = d
+    sd = out if depth == -math.inf else -depth
+    nx = ca * ex + cr * ux
+    ny = ca * ey + cr * uy
+    nz = ca * ez + cr * uz
+    if feature == FEATURE_FRONT or feature == FEATURE_BACK:
+        return sd, nx, ny, nz, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, feature
+    # the turning of the radial direction, n_u (I - e e^T - u u^T) / rho with I - e e^T - u u^T = t t^T,
+    # t = e x u; at a rim also the turning in the (e, u) plane, sign(sd) (e e^T + u u^T - n n^T) / dist
+    kt = cr / rho if rho > 0.0 else 0.0
+    tx = ey * uz - ez * uy
+    ty = ez * ux - ex * uz
+    tz = ex * uy - ey * ux
+    kp = 0.0
+    if feature == FEATURE_RIM:
+        kp = 1.0 / dist if sd > 0.0 else -1.0 / dist
+    return (sd, nx, ny, nz,
+            kp * (ex * ex + ux * ux - nx * nx) + kt * tx * tx,
+            kp * (ey * ey + uy * uy - ny * ny) + kt * ty * ty,
+            kp * (ez * ez + uz * uz - nz * nz) + kt * tz * tz,
+            kp * (ex * ey + ux * uy - nx * ny) + kt * tx * ty,
+            kp * (ex * ez + ux * uz - nx * nz) + kt * tx * tz,
+            kp * (ey * ez + uy * uz - ny * nz) + kt * ty * tz,
+            feature)
+
+
+@jit
+def within_reach(px, py, pz, body_state, shape):
+    """Whether a point lies inside the cylinder that bounds the anchor (cheap test before the contact law)."""
+    rx, ry, rz, a = from_cog(px, py, pz, body_state)
+    if a > shape[0, CS_FRONT] or a < shape[shape.shape[0] - 1, CS_BACK]:
+        return False
+    rho2 = rx * rx + ry * ry + rz * rz - a * a
+    for i in range(shape.shape[0]):
+        if rho2 <= shape[i, CS_RADIUS] ** 2:
+            return True
+    return False
+
+
+@jit
+def length_on_surface(node_pos, seg_i, seg_f, first_seg, n_segs, body_state, shape, tolerance_m):
+    """Unstretched length of the segments ``first_seg`` .. ``first_seg + n_segs - 1`` with both ends within
+    ``tolerance_m`` of the anchor's surface or inside it [m] (a line resting on the anchor)."""
+    total = 0.0
+    for s in range(first_seg, first_seg + n_segs):
+        a = seg_i[s, SI_A]
+        b = seg_i[s, SI_B]
+        da = surface_distance(node_pos[a, 0], node_pos[a, 1], node_pos[a, 2], body_state, shape)[0]
+        db = surface_distance(node_pos[b, 0], node_pos[b, 1], node_pos[b, 2], body_state, shape)[0]
+        if da <= tolerance_m and db <= tolerance_m:
+            total += seg_f[s, SF_L0]
+    return total

@@ -1,0 +1,153 @@
+"""The line-anchor contact in the implicit step (``physics/implicit.py``): its linearisation, its active set and
+its reaction on the anchor.
+
+Why: the contact is stiff on the implicit step's scale (omega = 552 rad/s for the chain against steps of ~11 ms,
+k h^2 / m ~ 40), and a node that meets the anchor inside a step would fly a whole step into it (16 cm at 15 m/s).
+So, as the segments' axial law, the contact is solved for:
+
+- a node in the step's contact set gets h C + h^2 K on its diagonal block and h F - h^2 K w on its right-hand
+  side, with K = k n n^T, C = c n n^T + the friction's damping at fixed normal force (viscous g (I - n n^T), or
+  sliding mu N / |w_t| (I - n n^T - t t^T), t the slip direction), w the velocity relative to the body point:
+  one Newton iteration of backward Euler on the contact, with the anchor moving as the explicit step moves it;
+- the set holds the nodes inside at the start of the step; after each solve, a node outside predicted inside at
+  the end of the step enters with the unclipped linear law k d - c (w . n) (d < 0: the gap), so that the solve
+  sees where it lands, and a node inside predicted outside leaves (its start-of-step force removed); each node
+  changes at most once per step (as the segments, ``implicit_active_set``);
+- left out of K and C (the solver's blocks are symmetric): the turning of the normal (f_n H, below d / rho of k
+  n n^T), the anchor's rotation, and the friction's dependence on the normal force (symmetrised, it would be an
+  indefinite term of size mu k that can make the block singular);
+- the anchor receives the opposite of the impulse the solve gives each node (its change from the start-of-step
+  force, already in the anchor's explicit load), through its rigid-body equations: momentum is conserved.
+"""
+
+from __future__ import annotations
+
+import math
+
+from moor_env.physics._jit import jit_step
+from moor_env.physics.anchor_surface import surface_distance, within_reach
+from moor_env.physics.layout import BS_OMEGA, BS_POS, BS_VEL, CF_MU, CF_STICK_SPEED, CF_STIFFNESS, CF_ZETA
+
+# contact set of a node during one implicit step
+SET_OUT = 0  # outside, no contact this step
+SET_IN = 1  # inside at the start of the step
+SET_ENTERED = 2  # outside at the start, predicted inside at its end (linear law from the start)
+SET_LEFT = 3  # inside at the start, predicted outside at its end (no force)
+DEPTH_TOLERANCE_M = 1e-6  # a node must miss its predicted set by this much before the step is solved again
+
+
+@jit_step
+def contact_state(px, py, pz, vx, vy, vz, body_state, shape):
+    """Depth d (negative: gap) [m], outward normal, and the velocity w relative to the body point at the node
+    [m/s] of a node within reach of the anchor (``reach`` False, zeros otherwise)."""
+    if not within_reach(px, py, pz, body_state, shape):
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(px, py, pz, body_state, shape)
+    ox = body_state[BS_OMEGA]
+    oy = body_state[BS_OMEGA + 1]
+    oz = body_state[BS_OMEGA + 2]
+    rx = px - body_state[BS_POS]
+    ry = py - body_state[BS_POS + 1]
+    rz = pz - body_state[BS_POS + 2]
+    wx = vx - body_state[BS_VEL] - (oy * rz - oz * ry)
+    wy = vy - body_state[BS_VEL + 1] - (oz * rx - ox * rz)
+    wz = vz - body_state[BS_VEL + 2] - (ox * ry - oy * rx)
+    return True, -sd, nx, ny, nz, wx, wy, wz
+
+
+@jit_step
+def _friction_damping(depth, wn, tx, ty, tz, k, c, contact_f):
+    """The friction's damping at fixed normal force on the tangent plane, g (I - n n^T) - g_s t t^T [N s/m]:
+    viscous (g = the slope, g_s = 0) or sliding (g = mu N / |w_t|, g_s = g / |w_t|^2: sliding friction does not
+    grow with the slip speed). Returns (g, g_s)."""
+    normal = k * depth - c * wn
+    mu = contact_f[CF_MU]
+    if not (normal > 0.0 and mu > 0.0):
+        return 0.0, 0.0
+    st = math.sqrt(tx * tx + ty * ty + tz * tz)
+    slope = min(mu * normal / contact_f[CF_STICK_SPEED], c)
+    if slope * st <= mu * normal:
+        return slope, 0.0
+    g = mu * normal / st
+    return g, g / (st * st)
+
+
+@jit_step
+def contact_terms(h, mode, depth, nx, ny, nz, wx, wy, wz, mass_kg, contact_f, f0x, f0y, f0z):
+    """The node's terms of the implicit step in contact set ``mode``: h C + h^2 K (xx, yy, zz, xy, xz, yz) and
+    the right-hand side's addition (3) beyond the start-of-step contact force ``f0`` [N] already in it."""
+    if mode == SET_OUT:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    if mode == SET_LEFT:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -h * f0x, -h * f0y, -h * f0z
+    k = contact_f[CF_STIFFNESS]
+    c = 2.0 * contact_f[CF_ZETA] * math.sqrt(k * mass_kg)
+    wn = wx * nx + wy * ny + wz * nz
+    # h C_n + h^2 K = (h c + h^2 k) n n^T; -h^2 K w; an entering node's linear law at the start, h (k d - c w.n) n
+    a = h * c + h * h * k
+    f = -h * h * k * wn
+    if mode == SET_ENTERED:
+        f += h * (k * depth - c * wn)
+    bxx = a * nx * nx
+    byy = a * ny * ny
+    bzz = a * nz * nz
+    bxy = a * nx * ny
+    bxz = a * nx * nz
+    byz = a * ny * nz
+    if mode == SET_IN:
+        tx = wx - wn * nx
+        ty = wy - wn * ny
+        tz = wz - wn * nz
+        g, gs = _friction_damping(depth, wn, tx, ty, tz, k, c, contact_f)
+        g *= h
+        gs *= h
+        bxx += g * (1.0 - nx * nx) - gs * tx * tx
+        byy += g * (1.0 - ny * ny) - gs * ty * ty
+        bzz += g * (1.0 - nz * nz) - gs * tz * tz
+        bxy -= g * nx * ny + gs * tx * ty
+        bxz -= g * nx * nz + gs * tx * tz
+        byz -= g * ny * nz + gs * ty * tz
+    return bxx, byy, bzz, bxy, bxz, byz, f * nx, f * ny, f * nz
+
+
+@jit_step
+def predicted_depth(h, depth, nx, ny, nz, wx, wy, wz, dvx, dvy, dvz):
+    """Depth at the end of the step [m] from the solved velocity change dv (the anchor moving as explicitly
+    predicted, its point at the node keeping its velocity)."""
+    return depth - h * ((wx + dvx) * nx + (wy + dvy) * ny + (wz + dvz) * nz)
+
+
+@jit_step
+def contact_force_change(h, mode, depth, nx, ny, nz, wx, wy, wz, mass_kg, contact_f, dvx, dvy, dvz, f0x, f0y,
+                         f0z):
+    """The node's contact force over the step as the solve applied it, less the start-of-step force ``f0``
+    whose reaction the anchor's explicit load already holds [N] (the anchor takes the opposite):
+    F_step - f0 = -C dv - h K (w + dv), plus for an entering node its linear law at the start."""
+    if mode == SET_OUT:
+        return 0.0, 0.0, 0.0
+    if mode == SET_LEFT:
+        return -f0x, -f0y, -f0z
+    k = contact_f[CF_STIFFNESS]
+    c = 2.0 * contact_f[CF_ZETA] * math.sqrt(k * mass_kg)
+    dvn = dvx * nx + dvy * ny + dvz * nz
+    wn = wx * nx + wy * ny + wz * nz
+    fn = -c * dvn - h * k * (wn + dvn)
+    if mode == SET_ENTERED:
+        fn += k * depth - c * wn
+    fx = fn * nx
+    fy = fn * ny
+    fz = fn * nz
+    if mode == SET_IN:
+        tx = wx - wn * nx
+        ty = wy - wn * ny
+        tz = wz - wn * nz
+        g, gs = _friction_damping(depth, wn, tx, ty, tz, k, c, contact_f)
+        # -(g (I - n n^T) - g_s t t^T) dv
+        dtx = dvx - dvn * nx
+        dty = dvy - dvn * ny
+        dtz = dvz - dvn * nz
+        dvt = dvx * tx + dvy * ty + dvz * tz
+        fx -= g * dtx - gs * tx * dvt
+        fy -= g * dty - gs * ty * dvt
+        fz -= g * dtz - gs * tz * dvt
+    return fx, fy, fz
