@@ -65,6 +65,18 @@ from moor_env.physics.layout import (
 
 # features of the surface nearest to a point
 @jit
+def relative_velocity(px, py, pz, vx, vy, vz, body_state):
+    """Velocity of a point at p moving at v relative to the anchor's material point there,
+    w = v - v_G - omega x (p - r_G) [m/s]."""
+    ox = body_state[BS_OMEGA]
+    oy = body_state[BS_OMEGA + 1]
+    oz = body_state[BS_OMEGA + 2]
+    rx, ry, rz, _ = from_cog(px, py, pz, body_state)
+    return (vx - body_state[BS_VEL] - (oy * rz - oz * ry), vy - body_state[BS_VEL + 1] - (oz * rx - ox * rz),
+            vz - body_state[BS_VEL + 2] - (ox * ry - oy * rx))
+
+
+@jit
 def node_contact(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f, jac):
     """Contact force on a node of mass ``mass_kg`` at (p, v) from the anchor (module docstring).
 
@@ -97,10 +109,7 @@ def node_contact(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f, 
     ox = body_state[BS_OMEGA]
     oy = body_state[BS_OMEGA + 1]
     oz = body_state[BS_OMEGA + 2]
-    rx, ry, rz, _ = from_cog(px, py, pz, body_state)
-    wx = vx - body_state[BS_VEL] - (oy * rz - oz * ry)
-    wy = vy - body_state[BS_VEL + 1] - (oz * rx - ox * rz)
-    wz = vz - body_state[BS_VEL + 2] - (ox * ry - oy * rx)
+    wx, wy, wz = relative_velocity(px, py, pz, vx, vy, vz, body_state)
     wn = wx * nx + wy * ny + wz * nz
     fn = k * depth - c * wn
     tx = wx - wn * nx

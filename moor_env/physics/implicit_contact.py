@@ -26,7 +26,8 @@ import math
 
 from moor_env.physics._jit import jit_step
 from moor_env.physics.anchor_surface import surface_distance, within_reach
-from moor_env.physics.layout import BS_OMEGA, BS_POS, BS_VEL, CF_MU, CF_STICK_SPEED, CF_STIFFNESS, CF_ZETA
+from moor_env.physics.contact import relative_velocity
+from moor_env.physics.layout import CF_MU, CF_STICK_SPEED, CF_STIFFNESS, CF_ZETA
 
 # contact set of a node during one implicit step
 SET_OUT = 0  # outside, no contact this step
@@ -43,15 +44,7 @@ def contact_state(px, py, pz, vx, vy, vz, body_state, shape):
     if not within_reach(px, py, pz, body_state, shape):
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(px, py, pz, body_state, shape)
-    ox = body_state[BS_OMEGA]
-    oy = body_state[BS_OMEGA + 1]
-    oz = body_state[BS_OMEGA + 2]
-    rx = px - body_state[BS_POS]
-    ry = py - body_state[BS_POS + 1]
-    rz = pz - body_state[BS_POS + 2]
-    wx = vx - body_state[BS_VEL] - (oy * rz - oz * ry)
-    wy = vy - body_state[BS_VEL + 1] - (oz * rx - ox * rz)
-    wz = vz - body_state[BS_VEL + 2] - (ox * ry - oy * rx)
+    wx, wy, wz = relative_velocity(px, py, pz, vx, vy, vz, body_state)
     return True, -sd, nx, ny, nz, wx, wy, wz
 
 
