@@ -3,12 +3,15 @@
 * ``moor_env/AnchorRelease-v0`` (:class:`AnchorReleaseEnv`): sequential control of vessel spacing, mooring-line
   payout and the release moment; batched vector env :class:`AnchorReleaseVectorEnv`.
 * ``moor_env/AnchorPlan-v0`` (:class:`AnchorPlanEnv`): one step sets spacing, payout and release delay.
+* ``moor_env/AnchorPlan-v1`` (:class:`AnchorPlanV1Env`): one step on an observed site sets the crew's five levers
+  (spacing, payout, vertical chain, drop height, release phase) as absolute targets.
 
-Both are registered when ``moor_env`` is imported. Settings: ``configs/envs/*.yaml`` (:func:`load_env_config`).
+All are registered when ``moor_env`` is imported. Settings: ``configs/envs/*.yaml`` (:func:`load_env_config`).
 """
 
 from moor_env.envs.actuators import ACTION_NAMES
 from moor_env.envs.anchor_plan import AnchorPlanEnv
+from moor_env.envs.anchor_plan_v1 import AnchorPlanV1Env
 from moor_env.envs.anchor_release import AnchorReleaseEnv
 from moor_env.envs.config import SCENARIO_FIELDS, EnvConfig, load_env_config
 from moor_env.envs.observation import OBS_NAMES, OBS_SPEC
@@ -22,6 +25,7 @@ __all__ = [
     "REWARD_TERMS",
     "SCENARIO_FIELDS",
     "AnchorPlanEnv",
+    "AnchorPlanV1Env",
     "AnchorReleaseEnv",
     "AnchorReleaseVectorEnv",
     "EnvConfig",

@@ -13,7 +13,7 @@ from gymnasium import spaces
 from moor_env.envs.config import EnvConfig, load_env_config
 from moor_env.envs.core import InstallationCore, run_advance
 from moor_env.envs.observation import OBS_CLIP, OBS_NAMES
-from moor_env.envs.render import FrameRenderer, snapshot
+from moor_env.envs.render import PlanFrames, snapshot
 from moor_env.envs.reward import REWARD_TERMS
 from moor_env.envs.scenario import start_episode
 from moor_env.physics.vessels import track_state
@@ -35,7 +35,7 @@ def next_upcrossing_s(core: InstallationCore, t0_s: float, window_s: float) -> f
     return float(t0_s)
 
 
-class AnchorPlanEnv(gym.Env):
+class AnchorPlanEnv(PlanFrames, gym.Env):
     r"""One-shot dart-anchor release: a single action sets spacing, payout and the release delay.
 
     ## Description
@@ -186,16 +186,3 @@ class AnchorPlanEnv(gym.Env):
         if self.render_mode != "rgb_array" or not self._started:
             return None
         return self._draw(snapshot(self.core))
-
-    def fall_frames(self) -> list[np.ndarray]:
-        """Frames of the last fall, one every ``render.fall_frame_interval_s``."""
-        return [self._draw(s) for s in self._fall_snapshots]
-
-    def _draw(self, snap: dict) -> np.ndarray:
-        if self._renderer is None:
-            self._renderer = FrameRenderer(self.cfg.render.width_px, self.cfg.render.height_px)
-        return self._renderer.draw(snap)
-
-    def close(self):
-        """Drop the figure."""
-        self._renderer = None

@@ -2,8 +2,9 @@
 
 An env config names the scene it builds on (``scene: gjoa-500``), the fidelity overrides applied to every
 episode (a mapping of scene overrides, which a fidelity preset can stand in for), the control
-limits, the scenario distribution drawn at every reset, the reward weights, the one-shot plan settings, the
-equilibria kept in memory and rendering. Every value is SI with the unit in the key name (``_m``, ``_s``, ``_m_s``,
+limits, the scenario distribution drawn at every reset, the reward weights, the one-shot plan settings
+(AnchorPlan-v0's ``plan``; AnchorPlan-v1's ``site``, ``levers`` and ``success``, :mod:`moor_env.envs.plan_config`),
+the equilibria kept in memory and rendering. Every value is SI with the unit in the key name (``_m``, ``_s``, ``_m_s``,
 ``_n``, ``_deg``); ``_over_depth`` values are fractions of the water depth.
 
 Validation is pydantic (as :mod:`moor_env.config`); an invalid value raises
@@ -14,73 +15,35 @@ Validation is pydantic (as :mod:`moor_env.config`); an invalid value raises
 from __future__ import annotations
 
 import copy
-import math
 from pathlib import Path
 from typing import Any, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import Field, ValidationError, model_validator
 
 from moor_env.config import CONFIG_DIR
+from moor_env.envs.distributions import (
+    SCENARIO_RANGES,
+    SEED_FIELD,
+    SEED_HIGH,
+    Choice,
+    Distribution,
+    Uniform,
+    _KeyedError,
+    _Strict,
+    check_ranges,
+)
+from moor_env.envs.plan_config import LeverConfig, SiteConfig, SuccessConfig
 from moor_env.errors import ConfigError
 
 ENV_CONFIG_DIR = CONFIG_DIR / "envs"
 DEFAULT_ENV_CONFIG = "anchor-release"
 
-# Allowed range of every scenario field (inclusive): checked for constants, every choice and both uniform bounds.
-SCENARIO_RANGES: dict[str, tuple[float, float]] = {
-    "water_depth_m": (100.0, 3000.0),
-    "vessel_spacing_over_depth": (0.0, 1.0),
-    "mooring_line_length_over_depth": (0.5, 3.0),
-    "vertical_chain_length_m": (2.0, 150.0),
-    "drop_height_m": (2.0, 200.0),
-    "current_scale": (0.0, 3.0),
-    "current_direction_deg": (-360.0, 360.0),
-    "sea_state_hs_m": (0.0, 8.0),
-    "sea_state_tp_s": (3.0, 25.0),
-    "chain_cd_tangential": (0.0, 5.0),
-    "anchor_mass_scale": (0.5, 1.5),
-}
 # The fields that shape the hanging geometry (ranges or constants in the bundled configs); a drawn scenario
 # without an equilibrium is drawn again.
 GEOMETRY_FIELDS: tuple[str, ...] = ("water_depth_m", "vessel_spacing_over_depth", "mooring_line_length_over_depth",
                                     "vertical_chain_length_m", "drop_height_m")
-SEED_FIELD = "sea_state_seed"
-SEED_HIGH = 2**31 - 1
 SCENARIO_FIELDS: tuple[str, ...] = (*SCENARIO_RANGES, SEED_FIELD)
-
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-
-class Choice(_Strict):
-    """Draw one of the listed values with equal probability."""
-
-    choice: tuple[float, ...] = Field(..., min_length=1)
-
-
-class Uniform(_Strict):
-    """Draw uniformly between the two bounds (``[low, high]``)."""
-
-    uniform: tuple[float, float]
-
-    @model_validator(mode="after")
-    def _ordered(self) -> Uniform:
-        if not self.uniform[0] <= self.uniform[1]:
-            raise ValueError("uniform bounds must be [low, high] with low <= high")
-        return self
-
-
-Distribution = float | Choice | Uniform
-
-
-def _values(dist: Distribution) -> tuple[float, ...]:
-    if isinstance(dist, Choice):
-        return dist.choice
-    if isinstance(dist, Uniform):
-        return dist.uniform
-    return (float(dist),)
 
 
 class ScenarioConfig(_Strict):
@@ -107,12 +70,7 @@ class ScenarioConfig(_Strict):
 
     @model_validator(mode="after")
     def _ranges(self) -> ScenarioConfig:
-        for name, (lo, hi) in SCENARIO_RANGES.items():
-            dist = getattr(self, name)
-            for i, v in enumerate(_values(dist)):
-                if not (lo <= v <= hi) or not math.isfinite(v):
-                    where = name + ({Choice: f".choice[{i}]", Uniform: f".uniform[{i}]"}.get(type(dist), ""))
-                    raise _KeyedError(f"scenario.{where}", v, f"{lo} .. {hi}")
+        check_ranges(self, SCENARIO_RANGES, "scenario")
         if isinstance(self.sea_state_seed, int) and not 0 <= self.sea_state_seed <= SEED_HIGH:
             raise _KeyedError("scenario.sea_state_seed", self.sea_state_seed, f"'draw' or 0 .. {SEED_HIGH}")
         return self
@@ -210,6 +168,9 @@ class StaticsConfig(_Strict):
     memory_entries: int = Field(64, ge=0, le=100000,
                                 description="equilibria (with their compiled models) kept in memory for a geometry "
                                             "drawn again; 0 keeps none")
+    method: Literal["auto", "newton"] = Field(
+        "auto", description="solve_statics' method: auto falls back to the slow relaxation solver where Newton's "
+                            "method does not converge; newton refuses such a geometry at once (StaticsNotConverged)")
 
 
 class RenderConfig(_Strict):
@@ -233,16 +194,11 @@ class EnvConfig(_Strict):
     scenario: ScenarioConfig = ScenarioConfig()
     reward: RewardConfig = RewardConfig()
     plan: PlanConfig = PlanConfig()
+    site: SiteConfig = SiteConfig()
+    levers: LeverConfig = LeverConfig()
+    success: SuccessConfig = SuccessConfig()
     statics: StaticsConfig = StaticsConfig()
     render: RenderConfig = RenderConfig()
-
-
-class _KeyedError(ValueError):
-    """Raised inside validators to carry a full dotted key to the ConfigError."""
-
-    def __init__(self, key: str, value: object, allowed: str) -> None:
-        super().__init__(f"{key}={value!r}: allowed {allowed}")
-        self.key, self.value, self.allowed = key, value, allowed
 
 
 def _to_config_error(exc: ValidationError) -> ConfigError:

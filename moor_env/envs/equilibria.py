@@ -118,7 +118,7 @@ class Equilibria:
             self.memory.move_to_end(key)
             self.hits += 1
             return self.memory[key].copy(), "memory"
-        result = solve_statics(model, progress=False)
+        result = solve_statics(model, progress=False, method=self.config.method)
         self.solve_wall_s += result.wall_static_s
         self.solves += 1
         state = result.simulator.state

@@ -19,6 +19,9 @@ ENVS = {
     "AnchorPlan-v0": {
         "entry_point": "moor_env.envs.anchor_plan:AnchorPlanEnv",
     },
+    "AnchorPlan-v1": {
+        "entry_point": "moor_env.envs.anchor_plan_v1:AnchorPlanV1Env",
+    },
 }
 
 

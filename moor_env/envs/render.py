@@ -93,6 +93,24 @@ class FrameRenderer:
         frame = np.asarray(self.canvas.buffer_rgba())[:, :, :3].copy()
         return frame
 
+    def draw_site(self, depth_m: float, lines: list[str]) -> np.ndarray:
+        """A frame of a site before anything is simulated (AnchorPlan-v1 after its reset): the water column to
+        scale with the seabed, and ``lines`` of text describing the site."""
+        fig = self.fig
+        fig.clear()
+        ax = fig.add_axes((0.07, 0.09, 0.4, 0.82))
+        ax.set_xlim(-0.3 * depth_m, 0.3 * depth_m)
+        ax.set_ylim(-depth_m - 0.06 * depth_m, 0.08 * depth_m)
+        ax.axhspan(-depth_m, 0.0, color=WATER, zorder=0)
+        ax.axhspan(-depth_m - 0.1 * depth_m, -depth_m, color=SEABED, zorder=1)
+        ax.axhline(0.0, color="#2a6fb0", lw=0.8, zorder=1)
+        ax.set_ylabel("z [m]", fontsize=8)
+        ax.tick_params(labelsize=7)
+        fig.text(0.52, 0.88, "\n".join(lines), va="top", fontsize=9, family="monospace")
+        fig.suptitle("site (nothing simulated before the plan)", fontsize=9)
+        self.canvas.draw()
+        return np.asarray(self.canvas.buffer_rgba())[:, :, :3].copy()
+
     @staticmethod
     def _draw_lines(ax, snap: dict[str, Any], lw: float = 1.0) -> None:
         for name, (pos, mats) in snap["lines"].items():
@@ -173,3 +191,27 @@ class FrameRenderer:
         ax.plot([snap["target_xy"][0]], [-depth], marker="v", color=ANCHOR, ms=6, zorder=7)
         ax.set_title(f"anchor, tip {tip[2] + depth:.1f} m above seabed", fontsize=8)
         ax.tick_params(labelsize=7)
+
+
+class PlanFrames:
+    """The frames of the one-step plan envs (a mixin before ``gym.Env``): the fall recorded by the step
+    (``self._fall_snapshots``) drawn by a renderer made on first use (``self._renderer``, ``self.cfg.render``)."""
+
+    _renderer: FrameRenderer | None
+    _fall_snapshots: list[dict]
+
+    def fall_frames(self) -> list[np.ndarray]:
+        """Frames of the last fall, one every ``render.fall_frame_interval_s``."""
+        return [self._draw(s) for s in self._fall_snapshots]
+
+    def _frames(self) -> FrameRenderer:
+        if self._renderer is None:
+            self._renderer = FrameRenderer(self.cfg.render.width_px, self.cfg.render.height_px)
+        return self._renderer
+
+    def _draw(self, snap: dict) -> np.ndarray:
+        return self._frames().draw(snap)
+
+    def close(self):
+        """Drop the figure."""
+        self._renderer = None

@@ -13,17 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from moor_env.envs.config import (
-    GEOMETRY_FIELDS,
-    SCENARIO_FIELDS,
-    SCENARIO_RANGES,
-    SEED_FIELD,
-    SEED_HIGH,
-    Choice,
-    EnvConfig,
-    Uniform,
-    _values,
-)
+from moor_env.envs.config import GEOMETRY_FIELDS, SCENARIO_FIELDS, SCENARIO_RANGES, SEED_FIELD, SEED_HIGH, EnvConfig
+from moor_env.envs.distributions import Choice, Uniform, _values, draw_fields
 from moor_env.errors import ConfigError, StaticsNotConverged
 
 MAX_SCENARIO_DRAWS = 10
@@ -45,50 +36,19 @@ def representative_scenario(cfg: EnvConfig) -> dict[str, Any]:
     return out
 
 
-def _draw(dist, rng: np.random.Generator) -> float:
-    if isinstance(dist, Choice):
-        return float(dist.choice[int(rng.integers(len(dist.choice)))])
-    if isinstance(dist, Uniform):
-        lo, hi = dist.uniform
-        return float(rng.uniform(lo, hi))
-    return float(dist)
-
-
 def draw_scenario(cfg: EnvConfig, rng: np.random.Generator, options: dict[str, Any] | None = None) -> dict[str, Any]:
     """Draw a scenario from the config's distribution; ``options`` fixes fields.
 
     Every field is drawn (in the fixed order of :data:`SCENARIO_FIELDS`) even when ``options`` fixes it, so that
-    fixing one field leaves the draws of the others unchanged for a given seed.
+    fixing one field leaves the draws of the others unchanged for a given seed
+    (:func:`~moor_env.envs.distributions.draw_fields`).
 
     Raises
     ------
     ConfigError
         For an unknown option key or a value outside the field's range.
     """
-    scenario: dict[str, Any] = {}
-    for name in SCENARIO_FIELDS:
-        if name == SEED_FIELD:
-            dist = cfg.scenario.sea_state_seed
-            scenario[name] = int(rng.integers(0, SEED_HIGH + 1)) if dist == "draw" else int(dist)
-        else:
-            scenario[name] = _draw(getattr(cfg.scenario, name), rng)
-    for key, value in (options or {}).items():
-        if key not in SCENARIO_FIELDS:
-            raise ConfigError(f"options.{key}", value, "a scenario field: " + ", ".join(SCENARIO_FIELDS))
-        if key == SEED_FIELD:
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 <= value <= SEED_HIGH:
-                raise ConfigError(f"options.{key}", value, f"an integer 0 .. {SEED_HIGH}")
-            scenario[key] = int(value)
-            continue
-        lo, hi = SCENARIO_RANGES[key]
-        try:
-            v = float(value)
-        except (TypeError, ValueError):
-            raise ConfigError(f"options.{key}", value, "a number") from None
-        if not (lo <= v <= hi):
-            raise ConfigError(f"options.{key}", value, f"{lo} .. {hi}")
-        scenario[key] = v
-    return scenario
+    return draw_fields(cfg.scenario, SCENARIO_RANGES, rng, options, SEED_HIGH, "scenario")
 
 
 def start_episode(core, rng: np.random.Generator, options: dict[str, Any] | None):

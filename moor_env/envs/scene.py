@@ -113,6 +113,10 @@ class SceneFactory:
             self.tight_line = TightLineRule(rule, keys_by_sea, scene.anchor.length_m,
                                             scene.installation.fairlead_depth_m)
         self.chain_material = scene.installation.chain_material
+        # what AnchorPlan-v1's levers and soil need of the scene (the same in every scenario of a config)
+        self.anchor_length_m = scene.anchor.length_m
+        self.anchor_mass_kg = sum(s.length_m * s.mass_per_length_kg_m for s in scene.anchor.sections)
+        self.fairlead_depth_m = scene.installation.fairlead_depth_m
         self.nominal_cd_t = float(self.base["materials"][self.chain_material]["cd_tangential"])
         comp = scene.installation.components
         if not (comp.wire and comp.vertical_chain and comp.mooring_line):

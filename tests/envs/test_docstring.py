@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import re
 
-from moor_env.envs import ACTION_NAMES, OBS_SPEC, REWARD_TERMS, AnchorPlanEnv, AnchorReleaseEnv
+from moor_env.envs import ACTION_NAMES, OBS_SPEC, REWARD_TERMS, AnchorPlanEnv, AnchorPlanV1Env, AnchorReleaseEnv
 from moor_env.envs.anchor_plan import PLAN_ACTION_NAMES
+from moor_env.envs.levers import LEVER_NAMES
+from moor_env.envs.site import SITE_OBS_SPEC
 
 SECTIONS = ("Description", "Action Space", "Observation Space", "Rewards", "Starting State", "Episode End",
             "Arguments", "Version History")
@@ -24,19 +26,24 @@ def _table(text: str) -> list[list[str]]:
 
 
 def test_sections_in_order():
-    for env in (AnchorReleaseEnv, AnchorPlanEnv):
+    for env in (AnchorReleaseEnv, AnchorPlanEnv, AnchorPlanV1Env):
         positions = [env.__doc__.find(f"## {name}") for name in SECTIONS]
         assert all(p >= 0 for p in positions) and positions == sorted(positions), env.__name__
 
 
-def test_release_tables_match_code():
-    doc = AnchorReleaseEnv.__doc__
+def _check_observations(doc: str, spec) -> None:
+    """The Observation Space table lists ``spec`` in order with its units, offsets and scales, and its shape."""
     obs = _table(_section(doc, "Observation Space"))
-    assert [int(r[0]) for r in obs] == list(range(len(OBS_SPEC)))
-    for row, (name, unit, offset, scale, _) in zip(obs, OBS_SPEC, strict=True):
+    assert [int(r[0]) for r in obs] == list(range(len(spec)))
+    for row, (name, unit, offset, scale, _) in zip(obs, spec, strict=True):
         assert row[1] == name and row[2] == unit
         assert float(row[3]) == offset and float(row[4]) == scale, name
-    assert f"({len(OBS_SPEC)},)" in _section(doc, "Observation Space")
+    assert f"({len(spec)},)" in _section(doc, "Observation Space")
+
+
+def test_release_tables_match_code():
+    doc = AnchorReleaseEnv.__doc__
+    _check_observations(doc, OBS_SPEC)
     actions = _table(_section(doc, "Action Space"))
     assert [r[1] for r in actions] == list(ACTION_NAMES)
     assert f"({len(ACTION_NAMES)},)" in _section(doc, "Action Space")
@@ -49,3 +56,11 @@ def test_plan_tables_match_code():
     actions = _table(_section(doc, "Action Space"))
     assert [r[1] for r in actions] == list(PLAN_ACTION_NAMES)
     assert f"({len(OBS_SPEC)},)" in _section(doc, "Observation Space")
+
+
+def test_plan_v1_tables_match_code():
+    doc = AnchorPlanV1Env.__doc__
+    actions = _table(_section(doc, "Action Space"))
+    assert [r[1] for r in actions] == list(LEVER_NAMES)
+    assert f"({len(LEVER_NAMES)},)" in _section(doc, "Action Space")
+    _check_observations(doc, SITE_OBS_SPEC)

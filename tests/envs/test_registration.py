@@ -5,7 +5,7 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 
-from moor_env.envs import AnchorPlanEnv, AnchorReleaseEnv, AnchorReleaseVectorEnv
+from moor_env.envs import AnchorPlanEnv, AnchorPlanV1Env, AnchorReleaseEnv, AnchorReleaseVectorEnv
 
 
 def test_ids_resolve(tiny):
@@ -17,6 +17,10 @@ def test_ids_resolve(tiny):
     for env_id in ("moor_env/AnchorPlan-v0", "moor_env:AnchorPlan-v0"):
         env = gym.make(env_id, config="tiny", overrides=tiny)
         assert isinstance(env.unwrapped, AnchorPlanEnv)
+        env.close()
+    for env_id in ("moor_env/AnchorPlan-v1", "moor_env:AnchorPlan-v1", "AnchorPlan-v1"):
+        env = gym.make(env_id)
+        assert isinstance(env.unwrapped, AnchorPlanV1Env) and env.unwrapped.cfg.name == "anchor-plan"
         env.close()
     spec = gym.spec("moor_env/AnchorRelease-v0")
     assert spec.vector_entry_point == "moor_env.envs.vector:make_vector_env"  # AnchorReleaseVectorEnv or sharded
