@@ -88,7 +88,8 @@ HYPERPARAMS: dict[str, type[_Strict]] = {"ppo": PPOParams, "sac": SACParams, "td
 class EnvSection(_Strict):
     """Which env to train on and its config (``configs/envs``)."""
 
-    id: Literal["moor_env/AnchorPlan-v0", "moor_env/AnchorRelease-v0"] = "moor_env/AnchorPlan-v0"
+    id: Literal["moor_env/AnchorPlan-v0", "moor_env/AnchorPlan-v1", "moor_env/AnchorRelease-v0"] = \
+        "moor_env/AnchorPlan-v0"
     config: str = Field("anchor-release", description="bundled env config name or YAML path")
     overrides: dict[str, Any] = Field(default_factory=dict, description="{dotted key: value} into the env config")
 

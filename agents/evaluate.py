@@ -46,7 +46,6 @@ import argparse
 import math
 import multiprocessing as mp
 import sys
-import textwrap
 import time
 from pathlib import Path
 from typing import Any
@@ -56,23 +55,31 @@ import numpy as np
 from tqdm import tqdm
 
 import moor_env  # noqa: F401 - registers the envs
-from agents.baselines import BASELINES, PLAN_ENV, RELEASE_ENV, make_baseline
-from agents.io import write_atomic, write_json_atomic, write_text_atomic
+from agents.baselines import BASELINES, PLAN_ENV, PLAN_V1_ENV, RELEASE_ENV, is_plan_env, is_plan_v1, make_baseline
+from agents.bundled import resolve_target
+from agents.config import load_train_config
 from agents.policy import EpisodeContext, Policy
-from agents.scenarios import DEFAULT_COUNT, held_out_scenarios, load_scenarios
+from agents.report import markdown_table, save_figure, write_records, write_report
+from agents.runs import run_dirs
+from agents.scenarios import (
+    DEFAULT_COUNT,
+    DEFAULT_SITE_COUNT,
+    PLAN_V1_CONFIG,
+    held_out_scenarios,
+    held_out_sites,
+    load_scenarios,
+)
 from agents.statistics import BOOTSTRAP_SAMPLES as STATS_BOOTSTRAP_SAMPLES
 from agents.statistics import BOOTSTRAP_SEED, evaluation_statistics, format_statistics, wilson_interval
-from agents.success import LIMIT_TERMS, SUCCESS_TILT_DEG, success_of
+from agents.success import LIMIT_TERMS, success_of
 from agents.train_rllib import load_run_policies
 from moor_env.envs.config import EnvConfig, load_env_config
 from moor_env.errors import ConfigError, StaticsNotConverged
 
 CONFIDENCE = 0.95
 BOOTSTRAP_SAMPLES = 2000
-ENV_ALIASES = {"plan": PLAN_ENV, "release": RELEASE_ENV}
+ENV_ALIASES = {"plan": PLAN_ENV, "plan-v1": PLAN_V1_ENV, "release": RELEASE_ENV}
 RECORDS_PATH = "benchmarks/results/rl_evaluation.json"
-RECORD_KEYS = ("policy", "run", "scenario", "seed", "success", "touchdown_speed_m_s", "required_speed_m_s",
-               "tilt_deg", "offset_m", "limits_exceeded", "reward")
 
 
 # --- episodes ----------------------------------------------------------------------------------------------------
@@ -109,8 +116,13 @@ def run_episode(env: gym.Env, policy: Policy, scenario: dict[str, Any], env_id: 
         "success": success_of(td, terms, cfg),
         "steps": steps,
         "release_s": _release_time(info),
-        "wall_s": time.perf_counter() - t0,
     })
+    if "success" in info:  # AnchorPlan-v1 judges its own installation (moor_env.envs.plan_outcome)
+        record.update(success=bool(info["success"]), limits_exceeded=list(info["limits_exceeded"]),
+                      required_speed_m_s=float(info["site"]["required_speed_m_s"]), failure=info["failure"],
+                      margins=dict(info["margins"]), targets=dict(info["targets"]),
+                      max_tension_n=dict(info["max_tension_n"]))
+    record["wall_s"] = time.perf_counter() - t0
     return record
 
 
@@ -267,67 +279,11 @@ def combine_seeds(results: list[dict[str, Any]], name: str | None = None) -> dic
             "seed_results": [{"policy": r["policy"], "summary": r["summary"]} for r in results]}
 
 
-# --- tables and plots -------------------------------------------------------------------------------------------------
-def _fmt_ci(ci: tuple[float, float], digits: int) -> str:
-    return f"[{ci[0]:.{digits}f}, {ci[1]:.{digits}f}]"
-
-
-def markdown_table(results: list[dict[str, Any]]) -> str:
-    """One row per result: success rate with its 95 % interval, speed, tilt, reward, limits, touchdowns whose chain
-    fell into the anchor (:func:`summarize`), cost."""
-    head = ("| policy | env | episodes (seeds) | success [95 % CI] | speed m/s mean ± sd | tilt deg mean ± sd (p90) "
-            "| reward mean [95 % CI] | limits exceeded | chain inside | wall s |\n"
-            "|---|---|---|---|---|---|---|---|---|---|")
-    rows = [head]
-    for r in results:
-        s = r["summary"]
-        limits = ", ".join(f"{k} {v}" for k, v in sorted(s["limits_exceeded"].items())) or "none"
-        rows.append(
-            f"| {r['policy']} | {r['env_id'].split('/')[-1]} | {s['episodes']} ({s.get('seeds', 1)}) "
-            f"| {100 * s['success_rate']:.0f} % {_fmt_ci(tuple(100 * x for x in s['success_ci']), 0)} "
-            f"| {s['speed_m_s']['mean']:.2f} ± {s['speed_m_s']['std']:.2f} "
-            f"| {s['tilt_deg']['mean']:.2f} ± {s['tilt_deg']['std']:.2f} ({s['tilt_deg']['p90']:.2f}) "
-            f"| {s['reward']['mean']:.3f} {_fmt_ci(s['reward']['ci'], 3)} | {limits} | {s.get('chain_inside', 0)} "
-            f"| {r['wall_s']:.0f} |")
-    return "\n".join(rows) + "\n"
-
-
-def plot_distributions(results: list[dict[str, Any]], path: str | Path, required_speed_m_s: float = 24.0) -> Path:
-    """Touchdown speed and tilt per policy (box plots over the scenarios, points on top) with the thresholds."""
-    import matplotlib  # noqa: PLC0415 - matplotlib loads only to draw a figure
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # noqa: PLC0415
-
-    fig, axes = plt.subplots(1, 2, figsize=(max(11.0, 2.0 * len(results)), 4.6))
-    labels = [textwrap.fill(r["policy"], 16) for r in results]
-    for ax, key, limit, unit in ((axes[0], "touchdown_speed_m_s", required_speed_m_s, "touchdown speed [m/s]"),
-                                 (axes[1], "tilt_deg", SUCCESS_TILT_DEG, "tilt at touchdown [deg]")):
-        data = [np.array([e[key] for e in r["episodes"]], dtype=float) for r in results]
-        data = [d[np.isfinite(d)] for d in data]
-        ax.boxplot(data, showfliers=False)
-        ax.set_xticks(range(1, len(labels) + 1), labels, fontsize=8)
-        for i, d in enumerate(data, start=1):
-            jitter = np.random.default_rng(i).uniform(-0.12, 0.12, d.size)
-            ax.plot(i + jitter, d, "o", ms=3, alpha=0.6)
-        ax.axhline(limit, color="k", ls="--", lw=1)
-        ax.set_ylabel(unit)
-        ax.grid(alpha=0.3)
-    axes[0].set_title(f"speed (dashed: required {required_speed_m_s:g} m/s)")
-    axes[1].set_title(f"tilt (dashed: success below {SUCCESS_TILT_DEG:g} deg)")
-    fig.tight_layout()
-    out = _save_figure(fig, path)
-    plt.close(fig)
-    return out
-
-
-def _save_figure(fig: Any, path: str | Path) -> Path:
-    return write_atomic(path, lambda tmp: fig.savefig(tmp, dpi=110, format=Path(path).suffix.lstrip(".")))
-
-
+# --- rendering -------------------------------------------------------------------------------------------------------
 def render_episode(policy: Policy, scenario: dict[str, Any], path: str | Path, env_id: str = PLAN_ENV,
                    env_config: str | dict | EnvConfig = "anchor-release") -> dict[str, Any]:
-    """Run one episode with ``render_mode="rgb_array"`` and save three frames (hanging, mid-fall, touchdown)."""
+    """Run one episode with ``render_mode="rgb_array"`` and save three frames (hanging, mid-fall, touchdown; on
+    AnchorPlan-v1 the site instead of the hanging state)."""
     import matplotlib  # noqa: PLC0415 - matplotlib loads only to draw a figure
 
     matplotlib.use("Agg")
@@ -342,8 +298,10 @@ def render_episode(policy: Policy, scenario: dict[str, Any], path: str | Path, e
     env = gym.make(env_id, config=cfg, render_mode="rgb_array")
     record = run_episode(env, policy, scenario, env_id, cfg)
     fall = env.unwrapped.fall_frames()
+    # AnchorPlan-v1 simulates nothing before its action: its first frame shows the site
+    titles = ["site" if is_plan_v1(env_id) else "hanging", "falling", "touchdown"]
     frames = first + ([fall[len(fall) // 2], fall[-1]] if fall else [env.render()])
-    titles = ["hanging", "falling", "touchdown"][: len(frames)]
+    titles = titles[: len(frames)]
     fig, axes = plt.subplots(1, len(frames), figsize=(5.5 * len(frames), 4))
     for ax, frame, title in zip(np.atleast_1d(axes), frames, titles, strict=True):
         ax.imshow(frame)
@@ -352,7 +310,7 @@ def render_episode(policy: Policy, scenario: dict[str, Any], path: str | Path, e
     fig.suptitle(f"{policy.name} on {scenario['id']}: {record['touchdown_speed_m_s']:.2f} m/s, "
                  f"tilt {record['tilt_deg']:.2f} deg")
     fig.tight_layout()
-    _save_figure(fig, path)
+    save_figure(fig, path)
     plt.close(fig)
     env.close()
     return record
@@ -363,13 +321,13 @@ def evaluate_targets(targets: list[str], scenarios: list[dict[str, Any]], env: s
                      env_config: str = "anchor-release", n_jobs: int = 1, progress: bool = True,
                      optimiser: dict[str, int] | None = None, checkpoint: str = "final") -> list[dict[str, Any]]:
     """Evaluate run directories and baseline names; baselines run on ``env`` or else on the first run's env."""
-    runs = [(t, load_run_policies(t, checkpoint)) for t in targets if t not in BASELINES]
+    runs = [(t, load_run_policies(resolve_target(t), checkpoint)) for t in targets if t not in BASELINES]
     results = []
     env_id = ENV_ALIASES.get(env, env) if env else (runs[0][1][0].env_id if runs else PLAN_ENV)
     base_cfg = runs[0][1][0].env_config if runs and not env else load_env_config(env_config)
     for target in targets:
         if target in BASELINES:
-            b_env = env_id if target != "optimiser" else PLAN_ENV
+            b_env = env_id if target != "optimiser" or is_plan_env(env_id) else PLAN_ENV
             kwargs = dict(optimiser or {}) if target == "optimiser" else {}
             policy = make_baseline(target, b_env, base_cfg, **kwargs)
             results.append(evaluate_policy(policy, scenarios, b_env, base_cfg, n_jobs, progress))
@@ -381,60 +339,17 @@ def evaluate_targets(targets: list[str], scenarios: list[dict[str, Any]], env: s
     return results
 
 
-def _json_value(value: Any) -> Any:
-    """A record value as strict JSON: NaN and infinities become None, numpy scalars Python numbers."""
-    if isinstance(value, (list, tuple)):
-        return [_json_value(v) for v in value]
-    if hasattr(value, "item"):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
-
-
-def episode_records(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """One flat record per episode of every result, keys :data:`RECORD_KEYS` (``run``: the training run of a
-    policy trained with several seeds, else the policy; missing values None)."""
-    records = []
-    for r in results:
-        for e in r["episodes"]:
-            rec = {**e, "policy": r["policy"], "run": e.get("run", r["policy"])}
-            records.append({k: _json_value(rec.get(k)) for k in RECORD_KEYS})
-    return records
-
-
-def write_records(results: list[dict[str, Any]], path: str | Path, statistics: dict[str, Any] | None = None,
-                  meta: dict[str, Any] | None = None) -> Path:
-    """Write the per-episode records of every policy (:func:`episode_records`) and the statistics as JSON."""
-    data = {"meta": meta or {}, "statistics": statistics or {}, "episodes": episode_records(results)}
-    return write_json_atomic(path, data)
-
-
-def write_report(results: list[dict[str, Any]], out_dir: str | Path, scenarios: list[dict[str, Any]],
-                 meta: dict[str, Any] | None = None, statistics: dict[str, Any] | None = None) -> dict[str, Path]:
-    """Write ``evaluation.json`` (with ``statistics`` where given), ``evaluation.md`` and ``distributions.png``
-    into ``out_dir``."""
-    out = Path(out_dir)
-    table = markdown_table(results)
-    body = {"meta": meta or {}, "scenarios": scenarios, "results": results}
-    if statistics is not None:
-        body["statistics"] = statistics
-    paths = {
-        "json": write_json_atomic(out / "evaluation.json", body),
-        "markdown": write_text_atomic(out / "evaluation.md", table),
-        "plot": plot_distributions(results, out / "distributions.png"),
-    }
-    return paths
-
-
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     """Command-line arguments of ``python -m agents.evaluate``."""
     p = argparse.ArgumentParser(prog="python -m agents.evaluate", description=__doc__.split("\n\n")[0])
     p.add_argument("targets", nargs="+", help="run directories and/or baseline names: " + ", ".join(BASELINES))
     p.add_argument("--scenarios", help="scenario file (JSON/YAML list of {id, seed, options}); default: held-out set")
-    p.add_argument("--n-scenarios", type=int, default=DEFAULT_COUNT, help="size of the default held-out set")
-    p.add_argument("--env", help="env of the baselines: plan, release or an env id (default: the first run's)")
-    p.add_argument("--env-config", default="anchor-release", help="env config of the baselines without a run")
+    p.add_argument("--n-scenarios", type=int, default=None,
+                   help="size of the default held-out set (AnchorPlan-v1: 500 sites, else 24 scenarios)")
+    p.add_argument("--env", help="env of the baselines: plan, plan-v1, release or an env id (default: the first "
+                                 "run's)")
+    p.add_argument("--env-config", default=None, help="env config of the baselines without a run (default: "
+                                                      "anchor-plan on AnchorPlan-v1, else anchor-release)")
     p.add_argument("--checkpoint", default="final", choices=("final", "best", "last"))
     p.add_argument("--out", default="runs/evaluation", help="output folder (JSON, markdown, plots)")
     p.add_argument("--jobs", type=int, default=1, help="worker processes")
@@ -449,14 +364,35 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     return p.parse_args(argv)
 
 
+def targets_env_id(targets: list[str], env: str | None = None) -> str:
+    """The env an evaluation runs on: ``env`` (an alias of :data:`ENV_ALIASES` or an id), else the first trained
+    target's, else ``AnchorPlan-v0``."""
+    if env:
+        return ENV_ALIASES.get(env, env)
+    for target in targets:
+        if target not in BASELINES:
+            return load_train_config(run_dirs(resolve_target(target))[0] / "config.yaml").env.id
+    return PLAN_ENV
+
+
+def default_scenarios(env_id: str, n: int | None = None) -> list[dict[str, Any]]:
+    """The held-out set of an env: :func:`~agents.scenarios.held_out_sites` on ``AnchorPlan-v1`` (``n`` default
+    500), else :func:`~agents.scenarios.held_out_scenarios` (``n`` default 24)."""
+    if is_plan_v1(env_id):
+        return held_out_sites(n or DEFAULT_SITE_COUNT)
+    return held_out_scenarios(n or DEFAULT_COUNT)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point: evaluate, write the report, print the table."""
     args = parse_args(argv)
     try:
-        scenarios = load_scenarios(args.scenarios) if args.scenarios else held_out_scenarios(args.n_scenarios)
+        env_id = targets_env_id(args.targets, args.env)
+        env_config = args.env_config or (PLAN_V1_CONFIG if is_plan_v1(env_id) else "anchor-release")
+        scenarios = load_scenarios(args.scenarios) if args.scenarios else default_scenarios(env_id, args.n_scenarios)
         optimiser = {"population": args.population, "iterations": args.iterations,
                      "elite": min(3, args.population)}
-        results = evaluate_targets(args.targets, scenarios, args.env, args.env_config, args.jobs,
+        results = evaluate_targets(args.targets, scenarios, args.env, env_config, args.jobs,
                                    not args.no_progress, optimiser, args.checkpoint)
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -467,10 +403,10 @@ def main(argv: list[str] | None = None) -> int:
     write_records(results, args.records, stats, {**meta, "scenarios": scenarios})
     if args.render:
         first = args.targets[0]
-        policy = (make_baseline(first, results[0]["env_id"]) if first in BASELINES
-                  else load_run_policies(first, args.checkpoint)[0])
+        policy = (make_baseline(first, results[0]["env_id"], env_config) if first in BASELINES
+                  else load_run_policies(resolve_target(first), args.checkpoint)[0])
         render_episode(policy, scenarios[0], Path(args.out) / "episode.png", results[0]["env_id"],
-                       getattr(policy, "env_config", args.env_config))
+                       getattr(policy, "env_config", env_config))
     print(markdown_table(results))
     print(format_statistics(stats))
     print(f"written to {args.out}/ (evaluation.json, evaluation.md, distributions.png) and {args.records}")

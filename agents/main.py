@@ -1,10 +1,15 @@
-"""The main job: train a preset, evaluate it against the baselines on the held-out scenarios, print the table.
+"""The main job: train a preset, evaluate it beside the bundled policy and the baselines on held-out scenarios,
+print the table and the statistics.
 
-    python -m agents.main --config configs/agents/quick.yaml [--set key=value ...] [--n-scenarios 12] [--jobs 2]
+    python -m agents.main --config configs/agents/quick.yaml [--set key=value ...] [--n-scenarios 50] [--jobs 2]
 
 Trains every seed of the config (resuming a run that exists, so a second call only evaluates), then evaluates the
-trained policy, the crew rule of thumb, random actions and (on ``AnchorPlan-v0``) the per-scenario optimiser on
-``held_out_scenarios(n)``; writes ``evaluation.json``, ``evaluation.md``, ``distributions.png`` and
+bundled policy trained for the same env (:mod:`agents.bundled`, ``--bundled``), the preset just trained, the crew
+rule of thumb, random actions and (on the plan envs) the per-scenario optimiser on the env's held-out set
+(:func:`agents.evaluate.default_scenarios`: on ``AnchorPlan-v1`` sites the training never draws; 50 of them, so
+that one scenario is 2 points of success). Prints the table and the statistics (:mod:`agents.statistics`: Wilson
+intervals, paired differences against the crew with discordant counts, the task check); writes
+``evaluation.json``, ``evaluation.md``, ``distributions.png``, ``rl_evaluation.json`` (per-episode records) and
 ``episode.png`` (a rendered held-out episode of the trained policy) into ``<out_dir>/<name>/evaluation/``.
 """
 
@@ -16,14 +21,18 @@ import time
 from pathlib import Path
 
 from agents.baselines import is_plan_env
+from agents.bundled import bundled_path
 from agents.config import load_train_config, parse_set
-from agents.evaluate import evaluate_targets, markdown_table, render_episode, write_report
+from agents.evaluate import default_scenarios, evaluate_targets, render_episode
+from agents.report import markdown_table, write_records, write_report
 from agents.runs import load_run
-from agents.scenarios import held_out_scenarios, load_scenarios
+from agents.scenarios import load_scenarios
+from agents.statistics import evaluation_statistics, format_statistics
 from agents.train import train
 from moor_env.errors import ConfigError
 
-MAIN_SCENARIOS = 12
+MAIN_SCENARIOS = 50
+BUNDLED = {"moor_env/AnchorPlan-v1": "plan-v1-sac"}  # the bundled policy shown beside a preset of each env
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -34,8 +43,11 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--n-scenarios", type=int, default=MAIN_SCENARIOS, help="held-out scenarios to evaluate on")
     p.add_argument("--scenarios", help="scenario file instead of the held-out set (JSON/YAML {id, seed, options})")
     p.add_argument("--jobs", type=int, default=2, help="evaluation worker processes")
-    p.add_argument("--population", type=int, default=6, help="optimiser baseline: candidates per iteration")
-    p.add_argument("--iterations", type=int, default=2, help="optimiser baseline: cross-entropy iterations")
+    p.add_argument("--population", type=int, default=8, help="optimiser baseline: candidates per iteration")
+    p.add_argument("--iterations", type=int, default=3, help="optimiser baseline: cross-entropy iterations")
+    p.add_argument("--bundled", default=None,
+                   help="bundled policy to show beside the preset (default: the one for the preset's env; "
+                        "'none' for none)")
     return p.parse_args(argv)
 
 
@@ -47,20 +59,28 @@ def main(argv: list[str] | None = None) -> int:
         cfg = load_train_config(args.config, parse_set(args.set))
         train(cfg, resume=True)
         t_train = time.perf_counter() - t0
-        scenarios = load_scenarios(args.scenarios) if args.scenarios else held_out_scenarios(args.n_scenarios)
+        env_id = cfg.env.id
+        scenarios = load_scenarios(args.scenarios) if args.scenarios else default_scenarios(env_id, args.n_scenarios)
         experiment = Path(cfg.out_dir) / cfg.name
-        baselines = ["crew", "random"] + (["optimiser"] if is_plan_env(cfg.env.id) else [])
-        results = evaluate_targets([str(experiment), *baselines], scenarios, n_jobs=args.jobs,
+        bundled = args.bundled or BUNDLED.get(env_id)
+        shown = [] if bundled in (None, "none") or bundled_path(bundled) is None else [bundled]
+        baselines = ["crew", "random"] + (["optimiser"] if is_plan_env(env_id) else [])
+        results = evaluate_targets([*shown, str(experiment), *baselines], scenarios,
+                                   env=env_id, env_config=cfg.env.config, n_jobs=args.jobs,
                                    optimiser={"population": args.population, "iterations": args.iterations,
                                               "elite": min(3, args.population)})
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     out = experiment / "evaluation"
-    write_report(results, out, scenarios, {"config": cfg.model_dump(mode="json"), "train_wall_s": t_train})
+    stats = evaluation_statistics(results)
+    meta = {"config": cfg.model_dump(mode="json"), "train_wall_s": t_train}
+    write_report(results, out, scenarios, meta, stats)
+    write_records(results, out / "rl_evaluation.json", stats, {**meta, "scenarios": scenarios})
     policy = load_run(experiment / f"seed-{cfg.seeds[0]}")
     render_episode(policy, scenarios[0], out / "episode.png", policy.env_id, policy.env_config)
     print(markdown_table(results))
+    print(format_statistics(stats))
     print(f"train {t_train:.0f} s, total {time.perf_counter() - t0:.0f} s; report in {out}/")
     return 0
 

@@ -11,6 +11,12 @@ tangential drag stays a nuisance drawn from the training range (the crew does no
 
 A scenario is a mapping ``{"id": str, "seed": int, "options": {field: value}}``; ``options`` fixes every
 field of ``moor_env.envs.SCENARIO_FIELDS`` through ``env.reset(seed=seed, options=options)``.
+
+**AnchorPlan-v1** (:func:`held_out_sites`): sites drawn from the env config's own continuous ``site``
+distribution with a generator training never uses (seeded by :data:`HELD_OUT_SITE_SEED`), each with a wave seed
+from ``[2**30, 2**31)``, where training draws its wave seeds from ``[0, 2**30)``
+(:data:`moor_env.envs.plan_config.TRAINING_SEED_HIGH`): the same distribution, never the same draw. ``options``
+fixes every field of ``moor_env.envs.plan_config.SITE_FIELDS``.
 """
 
 from __future__ import annotations
@@ -23,11 +29,16 @@ import numpy as np
 import yaml
 
 from agents.io import write_text_atomic
-from moor_env.envs import SCENARIO_FIELDS
+from moor_env.envs import SCENARIO_FIELDS, load_env_config
+from moor_env.envs.plan_config import SITE_FIELDS, TRAINING_SEED_HIGH
+from moor_env.envs.site import draw_site
 from moor_env.errors import ConfigError
 
 HELD_OUT_SEED = 20250605
+HELD_OUT_SITE_SEED = 17_2026_0917
 DEFAULT_COUNT = 24
+DEFAULT_SITE_COUNT = 500
+PLAN_V1_CONFIG = "anchor-plan"
 HELD_OUT_VALUES: dict[str, tuple[float, ...]] = {
     "water_depth_m": (450.0, 550.0, 650.0),
     "vessel_spacing_over_depth": (0.15, 0.25, 0.35),
@@ -81,6 +92,31 @@ def held_out_scenarios(n: int = DEFAULT_COUNT, seed: int = HELD_OUT_SEED) -> lis
     return scenarios
 
 
+def held_out_sites(n: int = DEFAULT_SITE_COUNT, seed: int = HELD_OUT_SITE_SEED,
+                   env_config: str = PLAN_V1_CONFIG) -> list[dict[str, Any]]:
+    """The held-out AnchorPlan-v1 set: ``n`` sites drawn from ``env_config``'s ``site`` distribution with a
+    generator seeded by ``seed``, wave seeds from the upper half of the seed range (module docstring).
+
+    Site ``i`` depends on ``(seed, i)`` only, so a smaller set is the start of a larger one.
+    """
+    if n < 1:
+        raise ConfigError("n", n, ">= 1")
+    cfg = load_env_config(env_config)
+    scenarios = []
+    for i in range(n):
+        rng = np.random.default_rng([seed, i])
+        options = draw_site(cfg, rng)
+        options["sea_state_seed"] = int(rng.integers(TRAINING_SEED_HIGH + 1, 2**31))
+        scenarios.append({"id": site_id(i, options), "seed": int(rng.integers(0, 2**31 - 1)), "options": options})
+    return scenarios
+
+
+def site_id(index: int, options: dict[str, Any]) -> str:
+    """A short readable name of a site: index, depth, current scale, Hs and required penetration ratio."""
+    return (f"{index:04d}-h{options['water_depth_m']:.0f}-c{options['current_scale']:.2f}"
+            f"-hs{options['sea_state_hs_m']:.1f}-p{options['penetration_ratio']:.3f}")
+
+
 def scenario_id(index: int, options: dict[str, Any]) -> str:
     """A short readable name: index, depth, spacing/depth, current scale and Hs."""
     return (f"{index:03d}-h{options['water_depth_m']:.0f}-s{options['vessel_spacing_over_depth']:.2f}"
@@ -106,8 +142,9 @@ def validate_scenarios(scenarios: Any, source: str = "scenarios") -> list[dict[s
         if not isinstance(options, dict):
             raise ConfigError(f"{where}.options", options, "a mapping of scenario fields")
         for key in options:
-            if key not in SCENARIO_FIELDS:
-                raise ConfigError(f"{where}.options.{key}", options[key], "one of " + ", ".join(SCENARIO_FIELDS))
+            if key not in SCENARIO_FIELDS and key not in SITE_FIELDS:
+                fields = ", ".join(dict.fromkeys(SCENARIO_FIELDS + SITE_FIELDS))
+                raise ConfigError(f"{where}.options.{key}", options[key], f"a scenario or site field: {fields}")
         out.append({"id": str(sc.get("id", f"{i:03d}")), "seed": seed, "options": dict(options)})
     return out
 

@@ -20,6 +20,9 @@ Everything here is numpy and the standard library (no scipy.stats, no rliable at
   ``scipy.stats.trim_mean(..., 0.25, axis=None)``, which is rliable's ``aggregate_iqm``.
 * **Task check** (:func:`task_checks`): the crew beats random and the optimiser beats the crew, each with the
   paired interval of the difference above 0; every trained policy is checked against the crew the same way.
+* **Reward and success** (:func:`reward_order`): whether ordering the policies by mean reward orders them by
+  success rate (every pair of policies with different success rates ranked the same way by both), the check
+  that the reward is aligned with what counts.
 
 :func:`evaluation_statistics` computes all of it from the results of :func:`agents.evaluate.evaluate_policy`
 (scenarios matched by id and seed; a policy trained with several seeds contributes one row per run, tagged
@@ -252,14 +255,46 @@ def task_checks(comparisons: list[dict[str, Any]], trained: Sequence[str] = ()) 
     return checks
 
 
+def reward_order(results: list[dict[str, Any]]) -> dict[str, Any]:
+    """Do the policies' mean rewards order them as their success rates do?
+
+    Returns ``by_success`` and ``by_reward`` (policy names, best first), ``pairs`` (pairs of policies whose success
+    rates differ), ``concordant`` (of those, the pairs the mean reward ranks the same way), ``discordant`` (the
+    others, as ``[better by success, better by reward]``) and ``same_order`` (no discordant pair). Episodes without
+    a finite reward count as reward 0 (an episode that never started scores nothing); a result without any is
+    left out.
+    """
+    rows = []
+    for r in results:
+        success = np.array([bool(e["success"]) for e in r["episodes"]], dtype=float)
+        reward = np.array([e.get("reward", math.nan) for e in r["episodes"]], dtype=float)
+        if not np.isfinite(reward).any():
+            continue  # a result without rewards takes no part
+        rows.append((r["policy"], float(success.mean()), float(np.where(np.isfinite(reward), reward, 0.0).mean())))
+    discordant, pairs = [], 0
+    for i, (a, sa, ra) in enumerate(rows):
+        for b, sb, rb in rows[i + 1:]:
+            if sa == sb:
+                continue
+            pairs += 1
+            if (sa - sb) * (ra - rb) <= 0.0:
+                discordant.append([a, b] if sa > sb else [b, a])
+    return {"by_success": [n for n, _, _ in sorted(rows, key=lambda x: -x[1])],
+            "by_reward": [n for n, _, _ in sorted(rows, key=lambda x: -x[2])],
+            "mean_reward": {n: rw for n, _, rw in rows}, "success_rate": {n: sr for n, sr, _ in rows},
+            "pairs": pairs, "concordant": pairs - len(discordant), "discordant": discordant,
+            "same_order": not discordant}
+
+
 def evaluation_statistics(results: list[dict[str, Any]], samples: int = BOOTSTRAP_SAMPLES,
                           seed: int = BOOTSTRAP_SEED, confidence: float = CONFIDENCE) -> dict[str, Any]:
     """All statistics of a set of evaluation results (one per policy, same scenarios).
 
     Returns ``success`` (per policy: :func:`success_rate` over all its episodes), ``seeds`` (per policy with
     per-run results: :func:`iqm_interval` of the runs' success rates), ``paired`` (each trained policy minus
-    crew, crew minus random, optimiser minus crew, where both were evaluated: :func:`compare_results`) and
-    ``checks`` (:func:`task_checks`). Policies named ``random``, ``crew``, ``optimiser`` are the baselines; the
+    crew, crew minus random, optimiser minus crew, where both were evaluated: :func:`compare_results`),
+    ``reward_order`` (:func:`reward_order`) and ``checks`` (:func:`task_checks`, and whether the mean reward orders
+    the policies by success). Policies named ``random``, ``crew``, ``optimiser`` are the baselines; the
     others count as trained policies.
     """
     by_name = {r["policy"]: r for r in results}
@@ -274,8 +309,13 @@ def evaluation_statistics(results: list[dict[str, Any]], samples: int = BOOTSTRA
     pairs = [*((name, "crew") for name in trained), ("crew", "random"), ("optimiser", "crew")]
     paired = [compare_results(by_name[a], by_name[b], samples, seed, confidence)
               for a, b in pairs if a in by_name and b in by_name]
-    return {"confidence": confidence, "success": success, "seeds": seeds, "paired": paired,
-            "checks": task_checks(paired, trained)}
+    order = reward_order(results)
+    checks = task_checks(paired, trained)
+    checks.append({"check": "mean reward orders the policies by success", "a": None, "b": None,
+                   "passed": order["same_order"] if order["pairs"] else None, "difference": None, "ci": None,
+                   "concordant": order["concordant"], "pairs": order["pairs"]})
+    return {"confidence": confidence, "success": success, "seeds": seeds, "paired": paired, "reward_order": order,
+            "checks": checks}
 
 
 def _pct(x: float) -> str:
@@ -307,6 +347,9 @@ def format_statistics(stats: dict[str, Any]) -> str:
     for c in stats["checks"]:
         if c["passed"] is None:
             lines.append(f"  NOT EVALUATED  {c['check']}")
+        elif c["difference"] is None:
+            lines.append(f"  {'PASS' if c['passed'] else 'FAIL'}  {c['check']}: {c['concordant']} of {c['pairs']} "
+                         f"pairs in the same order")
         else:
             lines.append(f"  {'PASS' if c['passed'] else 'FAIL'}  {c['check']}: {100 * c['difference']:+.1f} "
                          f"points {_pct_ci(c['ci'])}")

@@ -4,6 +4,10 @@
 5 deg) and speed at or above the env config's ``reward.required_speed_m_s`` (24 m/s), and no limit exceeded: no
 line above its MBL, the release unit's rating not exceeded, no fibre on the seabed (the ``tension``,
 ``release_unit`` and ``fibre_seabed`` reward terms of the episode, :data:`LIMIT_TERMS`, are all zero).
+
+``AnchorPlan-v1`` judges its installations itself (``info["success"]``, :mod:`moor_env.envs.plan_outcome`: the
+site's required speed, the offset and the chain pile-up included); :func:`episode_success` and
+:func:`agents.evaluate.run_episode` take its verdict.
 """
 
 from __future__ import annotations
@@ -26,5 +30,9 @@ def success_of(touchdown: dict[str, Any] | None, terms: dict[str, float], cfg: E
 
 
 def episode_success(info: dict[str, Any], cfg: EnvConfig) -> bool:
-    """Success of a one-step episode (``AnchorPlan-v0``, whose final info sums the reward terms)."""
+    """Success of a one-step episode: ``AnchorPlan-v1``'s own ``info["success"]`` (its site's required speed, the
+    offset and the chain pile-up included, :mod:`moor_env.envs.plan_outcome`), else from ``AnchorPlan-v0``'s final
+    info, which sums the reward terms."""
+    if "success" in info:
+        return bool(info["success"])
     return success_of(info.get("touchdown"), info["reward_terms"], cfg)

@@ -52,3 +52,21 @@ def test_validation_names_the_key(data, key):
     with pytest.raises(ConfigError) as err:
         validate_scenarios(data)
     assert err.value.key == key
+
+
+def test_held_out_sites_are_fixed_and_never_drawn_in_training():
+    """Same distribution as training, a generator of their own, wave seeds above every training draw."""
+    from agents.scenarios import held_out_sites  # noqa: PLC0415
+    from moor_env.envs.plan_config import SITE_FIELDS, TRAINING_SEED_HIGH  # noqa: PLC0415
+
+    sites = held_out_sites(40)
+    assert sites == held_out_sites(40) and held_out_sites(10) == sites[:10]
+    assert len({s["id"] for s in sites}) == 40 and held_out_sites(5, seed=1) != sites[:5]
+    assert all(set(s["options"]) == set(SITE_FIELDS) for s in sites)
+    assert all(s["options"]["sea_state_seed"] > TRAINING_SEED_HIGH for s in sites)
+    site = load_env_config("anchor-plan").site
+    for name in ("water_depth_m", "sea_state_hs_m", "penetration_ratio"):
+        lo, hi = getattr(site, name).uniform
+        values = [s["options"][name] for s in sites]
+        assert lo <= min(values) and max(values) <= hi and max(values) - min(values) > 0.5 * (hi - lo), name
+    assert validate_scenarios(sites) == sites  # site fields are valid options

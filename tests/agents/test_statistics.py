@@ -4,13 +4,15 @@ check, and the per-episode records of the evaluation entry point on a tiny run."
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
 from scipy import stats
 
 from agents.baselines import PLAN_ENV, make_baseline
-from agents.evaluate import combine_seeds, episode_records, evaluate_policy, main, write_records
+from agents.evaluate import combine_seeds, evaluate_policy, main
+from agents.report import episode_records, write_records
 from agents.scenarios import save_scenarios
 from agents.statistics import (
     compare_results,
@@ -21,6 +23,7 @@ from agents.statistics import (
     mcnemar_exact,
     paired_bootstrap_interval,
     paired_comparison,
+    reward_order,
     stratified_bootstrap_iqm,
     success_rate,
     task_checks,
@@ -129,13 +132,33 @@ def test_evaluation_statistics_and_task_check():
     assert s["seeds"]["sac"]["runs"] == 4 and set(s["seeds"]) == {"sac"}
     assert [(c["a"], c["b"]) for c in s["paired"]] == [("sac", "crew"), ("crew", "random"), ("optimiser", "crew")]
     checks = {c["check"]: c["passed"] for c in s["checks"]}
-    assert checks == {"crew beats random": True, "optimiser beats crew": True, "sac beats crew": False}
+    assert checks == {"crew beats random": True, "optimiser beats crew": True, "sac beats crew": False,
+                      "mean reward orders the policies by success": None}  # the results hold no rewards
     text = format_statistics(s)
     assert "PASS  crew beats random" in text and "FAIL  sac beats crew" in text
     # a missing baseline is reported, not passed
     assert task_checks([], ["sac"])[0]["passed"] is None
     assert "NOT EVALUATED" in format_statistics(evaluation_statistics(results[:2], samples=200))
     json.dumps(s)  # plain JSON
+
+
+def test_reward_order():
+    """Four policies whose mean rewards rank them as their success rates, then one pair swapped."""
+    def result(name, success, reward):
+        return {"policy": name, "episodes": [{"scenario": f"s{i}", "seed": i, "success": s, "reward": r}
+                                             for i, (s, r) in enumerate(zip(success, reward, strict=True))]}
+
+    results = [result("crew", [1, 1, 0, 0], [0.6, 0.5, 0.2, 0.1]), result("random", [1, 0, 0, 0], [0.5] + [0.1] * 3),
+               result("optimiser", [1, 1, 1, 0], [0.7] * 3 + [0.0]), result("sac", [1, 1, 1, 0], [0.8] * 3 + [0.1])]
+    order = reward_order(results)
+    assert order["pairs"] == 5 and order["same_order"] and order["discordant"] == []  # optimiser = sac: no pair
+    assert order["by_reward"] == ["sac", "optimiser", "crew", "random"]
+    results[1] = result("random", [1, 0, 0, 0], [0.9, 0.5, 0.5, math.nan])  # NaN (no episode) counts as 0
+    order = reward_order(results)
+    assert not order["same_order"] and order["discordant"] == [["crew", "random"]] and order["concordant"] == 4
+    s = evaluation_statistics(results, samples=200)
+    assert s["checks"][-1]["passed"] is False and s["reward_order"] == order
+    assert "FAIL  mean reward orders the policies by success: 4 of 5 pairs in the same order" in format_statistics(s)
 
 
 def test_compare_results_matches_scenarios_by_id_and_seed():
