@@ -256,6 +256,11 @@ class DiscretizationConfig(_Strict):
     fit_to_geometry: bool = Field(
         True, description="fit a preset's tight_line resolution to the scene's release geometry when it is loaded; "
         "the envs set false and choose it themselves, at the reset and again for the fall at the release")
+    line_anchor_contact: Literal["auto", "on", "off"] = Field(
+        "auto", description="contact between the lines and the anchor's body; auto: where the chain can catch up "
+        "with the falling anchor (moor_env.contact_model)")
+    contact_stiffness_scale: float = Field(
+        1.0, gt=0.0, le=10.0, description="multiplies the line-anchor contact stiffness (convergence studies)")
 
 
 class SimulationConfig(_Strict):
