@@ -255,9 +255,15 @@ class AnchorReleaseEnv(gym.Env):
         self._record_frame()
         return obs, reward, terminated, truncated, info
 
-    def fall_frames(self) -> list[np.ndarray]:
-        """Frames of the last fall, one every ``render.fall_frame_interval_s`` (any render mode but None)."""
-        return [self._renderer_draw(snap) for snap in self._fall_snapshots]
+    def fall_frames(self, which: list[int] | None = None) -> list[np.ndarray]:
+        """Frames of the last fall, one every ``render.fall_frame_interval_s`` (any render mode but None;
+        ``which``: only those of these indices, negative from the end)."""
+        snaps = self._fall_snapshots if which is None else [self._fall_snapshots[i] for i in which]
+        return [self._renderer_draw(snap) for snap in snaps]
+
+    def fall_frame_count(self) -> int:
+        """Frames :meth:`fall_frames` holds."""
+        return len(self._fall_snapshots)
 
     def render(self):
         """``rgb_array``: the current frame; ``rgb_array_list``: frames since the last call; ``human``: draw."""

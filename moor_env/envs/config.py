@@ -94,6 +94,11 @@ class ControlConfig(_Strict):
         None, gt=0.0, le=0.5,
         description="pre_release_dt_s for a sea without waves (Hs 0), where the loop moves only with the "
                     "vessels and the winch [s]; null: pre_release_dt_s")
+    fall_dt_scale: float = Field(
+        1.0, gt=0.0, le=1.0,
+        description="the fall's integration step as a fraction of the scene's (or fall integrator's) step; the "
+                    "implicit step's linearisation of a segment that turns while it goes taut puts spurious peaks "
+                    "into the tension limits, which half the step removes (docs/mbl-exceedance.md)")
     spacing_rate_max_m_s: float = Field(0.5, gt=0.0, le=2.0,
                                         description="second vessel's largest horizontal speed (DP slow move) [m/s]")
     spacing_accel_max_m_s2: float = Field(0.05, gt=0.0, le=1.0,

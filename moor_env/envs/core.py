@@ -225,7 +225,7 @@ class InstallationCore:
             sim = self.sim
             actuators.release(sim, t, self.max_fall_s, self.ramp_s)
             self.released = True
-            self.pending = Advance(t + self.max_fall_s, True, PHASE_FALL, sim.dt)
+            self.pending = Advance(t + self.max_fall_s, True, PHASE_FALL, sim.dt * self.cfg.control.fall_dt_scale)
             return self.pending
         v = actuators.dp_speed_m_s(a[0], self.spacing_rate, self.spacing_m(), self.depth, cfg)
         rate = actuators.winch_rate_m_s(a[1], self.line_length_total_m(), self.depth, cfg)

@@ -113,15 +113,22 @@ class FrameRenderer:
 
     @staticmethod
     def _draw_lines(ax, snap: dict[str, Any], lw: float = 1.0) -> None:
+        # one collection per material: a fine mesh has hundreds of segments, one artist each would take seconds
+        from matplotlib.collections import LineCollection  # noqa: PLC0415 - matplotlib loads with the renderer
+
         for name, (pos, mats) in snap["lines"].items():
             x, z = pos[:, 0], pos[:, 2]
             if name == "wire":
                 ax.plot(x, z, color=WIRE, lw=0.8 * lw, zorder=3)
                 continue
-            for k, mat in enumerate(mats):
-                color = FIBRE if mat == snap["fibre_material"] else CHAIN
-                width = 1.0 * lw if color == FIBRE else 1.6 * lw
-                ax.plot(x[k:k + 2], z[k:k + 2], color=color, lw=width, solid_capstyle="round", zorder=4)
+            xz = np.column_stack([x, z])
+            fibre = np.array([mat == snap["fibre_material"] for mat in mats], dtype=bool)
+            for mask, color, width in ((~fibre, CHAIN, 1.6 * lw), (fibre, FIBRE, 1.0 * lw)):
+                k = np.flatnonzero(mask)
+                if k.size:
+                    segments = np.stack([xz[k], xz[k + 1]], axis=1)
+                    ax.add_collection(LineCollection(segments, colors=color, linewidths=width, capstyle="round",
+                                                     zorder=4))
 
     def _overview(self, ax, snap: dict[str, Any]) -> None:
         from matplotlib.patches import Polygon  # noqa: PLC0415 - matplotlib loads with the first renderer
@@ -200,9 +207,15 @@ class PlanFrames:
     _renderer: FrameRenderer | None
     _fall_snapshots: list[dict]
 
-    def fall_frames(self) -> list[np.ndarray]:
-        """Frames of the last fall, one every ``render.fall_frame_interval_s``."""
-        return [self._draw(s) for s in self._fall_snapshots]
+    def fall_frames(self, which: list[int] | None = None) -> list[np.ndarray]:
+        """Frames of the last fall, one every ``render.fall_frame_interval_s`` (``which``: only those of these
+        indices, negative from the end)."""
+        snaps = self._fall_snapshots if which is None else [self._fall_snapshots[i] for i in which]
+        return [self._draw(s) for s in snaps]
+
+    def fall_frame_count(self) -> int:
+        """Frames :meth:`fall_frames` holds."""
+        return len(self._fall_snapshots)
 
     def _frames(self) -> FrameRenderer:
         if self._renderer is None:
