@@ -54,14 +54,16 @@ from _docs import DOCS, load_result, run_line, table, write_blocks  # noqa: E402
 from _machine import run_record  # noqa: E402
 
 from moor_env import load_scene, solve_statics  # noqa: E402
-from moor_env.physics import implicit as imp  # noqa: E402
 from moor_env.physics import layout as L  # noqa: E402
 from moor_env.physics._jit import jit  # noqa: E402
 from moor_env.physics.anchor import tilt_deg  # noqa: E402
 
-try:
+try:  # the breakdown needs the record kernels; a baseline tree from before them is timed on whole runs only
+    from moor_env.physics import implicit as imp  # noqa: E402
+    from moor_env.physics.implicit_active_set import update_active_set  # noqa: E402
+    from moor_env.physics.implicit_assembly import assemble  # noqa: E402
     from moor_env.physics.integrate import compute_loads  # noqa: E402
-except ImportError:  # a tree from before compute_loads (a baseline): whole-run timings only
+except ImportError:
     compute_loads = None
 
 RESULTS = ROOT / "benchmarks" / "results" / "bench_implicit_step.json"
@@ -135,57 +137,55 @@ class Case:
 
 
 @jit
-def _loop_loads(k, node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f, mat_f, line_f,
-                body_f, body_q, env_f, current_profile, node_force, node_mm, node_mass, node_contact, seg_tension,
-                body_load, body_acc):
+def _loop_loads(k, model, state):
     for _ in range(k):
-        compute_loads(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f, mat_f, line_f,
-                      body_f, body_q, env_f, current_profile, node_force, node_mm, node_mass, node_contact,
-                      seg_tension, body_load, body_acc)
+        compute_loads(model, state)
 
 
 @jit
-def _body_node(body_active, node_i):
-    if body_active:
-        for n in range(node_i.shape[0]):
-            if node_i[n, L.NI_KIND] == L.NODE_BODY:
+def _body_node(model, state):
+    if model.body_f[L.BF_ACTIVE] != 0.0:
+        for n in range(state.node_i.shape[0]):
+            if state.node_i[n, L.NI_KIND] == L.NODE_BODY:
                 return n
     return -1
 
 
 @jit
-def _loop_order(k, body_active, node_i, seg_i, seg_tension, pos0, vel0):
-    tree = pos0.view(np.int64)
-    orow = vel0.view(np.int64)
-    body_node = _body_node(body_active, node_i)
+def _loop_order(k, model, state):
+    tree = state.pos0.view(np.int64)
+    orow = state.vel0.view(np.int64)
+    body_node = _body_node(model, state)
     nq = 0
     for _ in range(k):
-        imp._setup(body_node, node_i, seg_i, seg_tension, tree, orow)
-        nq = imp._order(body_node, node_i, seg_i, tree, orow)
+        nq = imp.prepare(False, body_node, state, tree, orow)
     return nq
 
 
 @jit
-def _loop_solve(k, stage, h, body_active, node_pos, node_vel, body_state, node_i, node_f, seg_i, seg_f, mat_f,
-                body_f, env_f, current_profile, node_force, node_mm, node_mass, node_contact, node_acc,
-                seg_tension, body_acc, pos0, vel0):
-    """``k`` solves of the first active set at a fixed state, up to ``stage`` (0 assembly, 1 + elimination and
-    back substitution, 2 + active-set update)."""
-    tree = pos0.view(np.int64)
-    orow = vel0.view(np.int64)
-    body_node = _body_node(body_active, node_i)
-    imp._setup(body_node, node_i, seg_i, seg_tension, tree, orow)
-    nq = imp._order(body_node, node_i, seg_i, tree, orow)
+def _solve_once(first, stage, h, nq, body_node, model, state, tree, orow):
+    """One solve of the step's current active set, up to ``stage`` (0 assembly, 1 + elimination and back
+    substitution, 2 + active-set update); returns the set's changes (stage 2)."""
+    assemble(h, first, body_node, model, state, orow)
+    if stage >= 1:
+        imp.eliminate(h, nq, model, state, tree, orow)
+        if body_node >= 0:
+            imp.couple_body(h, body_node, model, state)
+        imp.back_substitute(h, nq, model, state, tree, orow)
+    if stage >= 2:
+        return update_active_set(h, model, state, orow)
+    return 0
+
+
+@jit
+def _loop_solve(k, stage, h, model, state):
+    """``k`` solves of the first active set at a fixed state, up to ``stage`` (see :func:`_solve_once`)."""
+    tree = state.pos0.view(np.int64)
+    orow = state.vel0.view(np.int64)
+    body_node = _body_node(model, state)
+    nq = imp.prepare(False, body_node, state, tree, orow)
     for _ in range(k):
-        imp._assemble(h, False, body_node, node_pos, node_vel, node_i, node_f, seg_i, seg_f, mat_f, env_f,
-                      current_profile, node_force, node_mm, node_mass, node_contact, node_acc, seg_tension, orow)
-        if stage >= 1:
-            imp._eliminate(h, nq, node_pos, seg_i, seg_f, mat_f, seg_tension, node_mm, node_acc, tree, orow)
-            if body_node >= 0:
-                imp._couple_body(h, body_node, body_state, node_f, body_f, body_acc, node_mm, node_acc)
-            imp._back_substitute(h, nq, node_pos, seg_i, seg_f, mat_f, seg_tension, node_mm, node_acc, tree, orow)
-        if stage >= 2:
-            imp._update_active_set(h, node_pos, node_vel, seg_i, seg_f, mat_f, node_acc, orow)
+        _solve_once(False, stage, h, nq, body_node, model, state, tree, orow)
     return nq
 
 
@@ -204,28 +204,22 @@ def piece_costs(case: Case) -> dict:
     sim = case.sim
     case.reset()
     sim.advance_to(0.5 * (sim.state.t + case.t_end_s))
-    st, m, w = sim.state, sim.model, sim.work
-    load_args = (st.node_pos, st.node_vel, st.body_state, m.body_active, st.node_i, st.node_f, st.seg_i, st.seg_f,
-                 m.mat_f, st.line_f, m.body_f, m.body_q, sim.env_f, m.current_profile, w.node_force, w.node_mm,
-                 w.node_mass, w.node_contact, w.seg_tension, w.body_load, w.body_acc)
+    st, w = sim.state, sim.work
+    records = sim.records()
     k = PIECE_LOOPS
-    _loop_loads(1, *load_args)
-    out = {"loads_us": _time_loop(_loop_loads, k, *load_args) / k * 1e6}
+    _loop_loads(1, *records)
+    out = {"loads_us": _time_loop(_loop_loads, k, *records) / k * 1e6}
     saved = [a.copy() for a in (w.node_force, w.node_mm, w.node_mass, w.node_contact, w.node_acc, w.seg_tension,
                                 w.body_acc)]
-    order_args = (m.body_active, st.node_i, st.seg_i, w.seg_tension, w.pos0, w.vel0)
-    _loop_order(1, *order_args)
-    out["order_rebuild_us"] = _time_loop(_loop_order, k, *order_args) / k * 1e6
-    solve_args = (sim.dt, m.body_active, st.node_pos, st.node_vel, st.body_state, st.node_i, st.node_f, st.seg_i,
-                  st.seg_f, m.mat_f, m.body_f, sim.env_f, m.current_profile, w.node_force, w.node_mm, w.node_mass,
-                  w.node_contact, w.node_acc, w.seg_tension, w.body_acc, w.pos0, w.vel0)
+    _loop_order(1, *records)
+    out["order_rebuild_us"] = _time_loop(_loop_order, k, *records) / k * 1e6
     stage_us = []
     for stage in range(3):
         for arr, s in zip((w.node_force, w.node_mm, w.node_mass, w.node_contact, w.node_acc, w.seg_tension,
                            w.body_acc), saved, strict=True):
             arr[...] = s
-        _loop_solve(1, stage, *solve_args)
-        stage_us.append(_time_loop(_loop_solve, k, stage, *solve_args) / k * 1e6)
+        _loop_solve(1, stage, sim.dt, *records)
+        stage_us.append(_time_loop(_loop_solve, k, stage, sim.dt, *records) / k * 1e6)
     out["assemble_us"] = stage_us[0]
     out["eliminate_back_substitute_us"] = stage_us[1] - stage_us[0]
     out["update_active_set_us"] = stage_us[2] - stage_us[1]
@@ -240,31 +234,20 @@ def solves_per_step(case: Case) -> dict:
     """Active-set solves per step over the case, replaying each step's loop from Python (not timed)."""
     sim = case.sim
     case.reset()
-    st, m, w = sim.state, sim.model, sim.work
+    st, w = sim.state, sim.work
     end = case.t_end_s
     counts = []
     while st.t < end - 0.5 * sim.dt:
         sim.evaluate_loads()
-        body_node = _body_node(m.body_active, st.node_i)
+        model, state = sim.records()
+        body_node = _body_node(model, state)
         tree = w.pos0.view(np.int64)
         orow = w.vel0.view(np.int64)
-        imp._setup(body_node, st.node_i, st.seg_i, w.seg_tension, tree, orow)
-        nq = imp._order(body_node, st.node_i, st.seg_i, tree, orow)
+        nq = imp.prepare(False, body_node, state, tree, orow)
         n = 0
         for it in range(imp.MAX_ACTIVE_SET_SOLVES):
             n += 1
-            imp._assemble(sim.dt, it == 0, body_node, st.node_pos, st.node_vel, st.node_i, st.node_f, st.seg_i,
-                          st.seg_f, m.mat_f, sim.env_f, m.current_profile, w.node_force, w.node_mm, w.node_mass,
-                          w.node_contact, w.node_acc, w.seg_tension, orow)
-            imp._eliminate(sim.dt, nq, st.node_pos, st.seg_i, st.seg_f, m.mat_f, w.seg_tension, w.node_mm,
-                           w.node_acc, tree, orow)
-            if body_node >= 0:
-                imp._couple_body(sim.dt, body_node, st.body_state, st.node_f, m.body_f, w.body_acc, w.node_mm,
-                                 w.node_acc)
-            imp._back_substitute(sim.dt, nq, st.node_pos, st.seg_i, st.seg_f, m.mat_f, w.seg_tension, w.node_mm,
-                                 w.node_acc, tree, orow)
-            if imp._update_active_set(sim.dt, st.node_pos, st.node_vel, st.seg_i, st.seg_f, m.mat_f, w.node_acc,
-                                      orow) == 0:
+            if _solve_once(it == 0, 2, sim.dt, nq, body_node, model, state, tree, orow) == 0:
                 break
         counts.append(n)
         status, _ = sim.advance_to(st.t + sim.dt, detect_touchdown=case.fall)

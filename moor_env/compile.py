@@ -1,7 +1,10 @@
-"""Scene config -> compiled model: flat arrays for the kernels and every derived quantity, computed here only.
+"""Scene config -> compiled model: the arrays of the kernels' records and every derived quantity, computed here only.
 
-Second stage of ``YAML -> SceneConfig -> Model -> kernels -> results``. A component the scene does not need is
-not built: an ``anchor-only`` scene has no nodes at all, ``vertical-chain`` has one line and no wire.
+Second stage of ``YAML -> SceneConfig -> Model -> kernels -> results``. The compiled :class:`Model` holds the
+model record's arrays (``physics/records.py``: materials, anchor, environment, current profile; a simulator adds
+its own environment copy and vessel tracks) and the initial state (:meth:`Model.initial_state`). A component the
+scene does not need is not built: an ``anchor-only`` scene has no nodes at all, ``vertical-chain`` has one line and
+no wire.
 """
 
 from __future__ import annotations
@@ -11,16 +14,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from moor_env.anchor_properties import anchor_properties, body_arrays
 from moor_env.config import SceneConfig
 from moor_env.errors import ConfigError
+from moor_env.line_mesh import MeshBuilder, hanging_curve
 from moor_env.physics import layout as L
+from moor_env.physics.records import SimState
 from moor_env.physics.stability import stable_time_step
 from moor_env.scene_geometry import submerged_mass_per_length
 
 VESSEL_INSTALLATION = 0
 VESSEL_SECOND = 1
-PAYOUT_EXTRA_FRACTION = 1.0  # capacity for paying out as much again as the initial line length
-PAYOUT_EXTRA_SEGMENTS = 40
 IMPLICIT_STABLE_MULTIPLE = 3.0  # implicit_euler measured stable to 3x its accuracy cap (physics/stability.py)
 
 
@@ -38,8 +42,9 @@ class LineInfo:
 class Model:
     """A compiled scene: arrays for the kernels (see ``physics.layout``) plus metadata for Python.
 
-    Arrays whose content changes during a run (topology under payout, node kinds at release) are copied
-    into each simulation state; the model itself is never modified.
+    The arrays of ``records.MODEL_FIELDS`` are attributes of the same names; those of ``records.STATE_FIELDS``
+    are the initial state, copied into each simulation state by :meth:`initial_state` (their content changes
+    during a run: topology under payout, node kinds at release). The model itself is never modified.
     """
 
     scene: SceneConfig
@@ -70,109 +75,17 @@ class Model:
     anchor_submerged_mass_kg: float = 0.0
     extras: dict = field(default_factory=dict)
 
+    def initial_state(self) -> SimState:
+        """A new simulation state at the compiled geometry, at rest (arrays copied)."""
+        return SimState(node_pos=self.node_pos0.copy(), node_vel=np.zeros_like(self.node_pos0),
+                        body_state=self.body_state0.copy(), node_i=self.node_i.copy(), node_f=self.node_f.copy(),
+                        seg_i=self.seg_i.copy(), seg_f=self.seg_f.copy(), line_i=self.line_i.copy(),
+                        line_f=self.line_f.copy())
+
     def arrays(self) -> dict[str, np.ndarray]:
         """The kernel arrays by name (views of the model's arrays)."""
         return {k: getattr(self, k) for k in ("node_i", "node_f", "seg_i", "seg_f", "mat_f", "line_i", "line_f",
                                               "env_f")}
-
-
-class _Builder:
-    """Accumulates nodes, segments and lines; turns them into arrays."""
-
-    def __init__(self) -> None:
-        self.node_kind: list[int] = []
-        self.node_ref: list[int] = []
-        self.node_line: list[int] = []
-        self.node_f: list[list[float]] = []
-        self.node_pos: list[np.ndarray] = []
-        self.segs: list[tuple[int, int, int, int, int, float]] = []
-        self.lines: list[list] = []
-
-    def add_node(self, kind: int, pos, ref: int = -1, line: int = -1, mass=0.0, volume=0.0, cda=0.0, ca=0.0,
-                 body_s=0.0) -> int:
-        self.node_kind.append(kind)
-        self.node_ref.append(ref)
-        self.node_line.append(line)
-        self.node_f.append([mass, volume, cda, ca, body_s])
-        self.node_pos.append(np.asarray(pos, dtype=float))
-        return len(self.node_kind) - 1
-
-    def add_line(self, bottom: int, top: int, sections: list[tuple[int, float, float]], points: np.ndarray,
-                 payout: bool, l_nom_top: float) -> int:
-        """Add a line of ``sections`` = (material, length, segment length) from bottom to top.
-
-        ``points`` is a (k, 3) polyline from the bottom node to the top node used as the initial shape.
-        """
-        line = len(self.lines)
-        lengths: list[float] = []
-        mats: list[int] = []
-        for mat, length, seg_len in sections:
-            n = max(1, int(math.ceil(length / seg_len - 1e-9)))
-            lengths += [length / n] * n
-            mats += [mat] * n
-        nseg = len(lengths)
-        extra = 0
-        if payout:
-            extra = max(PAYOUT_EXTRA_SEGMENTS, int(PAYOUT_EXTRA_FRACTION * sum(lengths) / l_nom_top))
-        seg_cap = nseg + extra
-        node_cap = seg_cap - 1
-        positions = _points_at_arclength(points, np.cumsum(lengths)[:-1] / sum(lengths))
-        node_start = len(self.node_kind)
-        for k in range(node_cap):
-            if k < nseg - 1:
-                self.add_node(L.NODE_FREE, positions[k], line=line)
-            else:
-                self.add_node(L.NODE_INACTIVE, positions[-1] if nseg > 1 else points[-1], line=line)
-        seg_start = len(self.segs)
-        for k in range(seg_cap):
-            if k < nseg:
-                a = bottom if k == 0 else node_start + k - 1
-                b = top if k == nseg - 1 else node_start + k
-                self.segs.append((a, b, mats[k], line, 1, lengths[k]))
-            else:
-                self.segs.append((top, top, mats[-1], line, 0, l_nom_top))
-        self.lines.append([seg_start, seg_cap, nseg, node_start, node_cap, bottom, top, int(payout), 0, l_nom_top])
-        return line
-
-
-def _points_at_arclength(points: np.ndarray, fractions: np.ndarray) -> np.ndarray:
-    """Points at the given fractions (0..1) of the arc length of a polyline."""
-    seg = np.linalg.norm(np.diff(points, axis=0), axis=1)
-    cum = np.concatenate([[0.0], np.cumsum(seg)])
-    u = fractions * cum[-1]
-    return np.stack([np.interp(u, cum, points[:, c]) for c in range(3)], axis=1).reshape(-1, 3)
-
-
-def hanging_curve(start, end, length: float, seabed_z: float, n: int = 400) -> np.ndarray:
-    """A first-guess hanging shape of given length between two points: the chord plus a parabolic sag,
-    sized by bisection so that its arc length is ``length``, clipped at the seabed.
-    """
-    start = np.asarray(start, float)
-    end = np.asarray(end, float)
-    u = np.linspace(0.0, 1.0, n)
-    chord = start[None, :] + u[:, None] * (end - start)[None, :]
-
-    def curve(sag: float) -> np.ndarray:
-        pts = chord.copy()
-        pts[:, 2] -= sag * 4.0 * u * (1.0 - u)
-        pts[:, 2] = np.maximum(pts[:, 2], seabed_z)
-        return pts
-
-    def arclength(sag: float) -> float:
-        return float(np.sum(np.linalg.norm(np.diff(curve(sag), axis=0), axis=1)))
-
-    if arclength(0.0) >= length:
-        return curve(0.0)
-    lo, hi = 0.0, max(length, 1.0)
-    while arclength(hi) < length and hi < 1e7:
-        hi *= 2.0
-    for _ in range(80):
-        mid = 0.5 * (lo + hi)
-        if arclength(mid) < length:
-            lo = mid
-        else:
-            hi = mid
-    return curve(0.5 * (lo + hi))
 
 
 def _material_arrays(scene: SceneConfig) -> tuple[np.ndarray, tuple[str, ...]]:
@@ -208,120 +121,6 @@ def _env_arrays(scene: SceneConfig) -> tuple[np.ndarray, np.ndarray]:
     return env_f, np.array(rows, dtype=float)
 
 
-@dataclass
-class AnchorProperties:
-    """Derived mass, buoyancy and hydrodynamic integrals of the anchor (all about the COG of the body,
-    structure plus flooded water)."""
-
-    mass_kg: float
-    structural_mass_kg: float
-    flooded_water_kg: float
-    displaced_volume_m3: float
-    cog_from_tip_m: float
-    inertia_kg_m2: float
-    s_buoyancy_m: float
-    s_tip_m: float
-    s_back_m: float
-    added_mass: tuple[float, float, float]
-    quadrature: np.ndarray
-    tip_cda_m2: float
-    back_cda_m2: float
-    length_m: float
-
-    water_density_kg_m3: float
-
-    @property
-    def submerged_mass_kg(self) -> float:
-        """Mass minus displaced water: what weight minus buoyancy accelerates [kg]."""
-        return self.mass_kg - self.water_density_kg_m3 * self.displaced_volume_m3
-
-
-def anchor_properties(scene: SceneConfig) -> AnchorProperties:
-    """Mass, COG, pitch inertia, buoyancy and Morison integrals of the anchor from its sections."""
-    anchor = scene.anchor
-    assert anchor is not None
-    rho = scene.environment.water_density_kg_m3
-    x0 = 0.0
-    rows = []
-    for sec in anchor.sections:
-        rows.append((x0, sec))
-        x0 += sec.length_m
-    length = x0
-    m_struct = sum(anchor.mass_scale * s.mass_per_length_kg_m * s.length_m for _, s in rows)
-    m_water = sum(rho * math.pi / 4 * s.flooded_diameter_m**2 * s.length_m for _, s in rows)
-    mass = m_struct + m_water
-    moment = sum((anchor.mass_scale * s.mass_per_length_kg_m + rho * math.pi / 4 * s.flooded_diameter_m**2)
-                 * s.length_m * (x + 0.5 * s.length_m) for x, s in rows)
-    x_g = moment / mass
-    inertia = 0.0
-    volume = 0.0
-    vol_moment = 0.0
-    a0 = a1 = a2 = 0.0
-    for x, s in rows:
-        xc = x + 0.5 * s.length_m
-        ms = anchor.mass_scale * s.mass_per_length_kg_m * s.length_m
-        mw = rho * math.pi / 4 * s.flooded_diameter_m**2 * s.length_m
-        ro, ri = 0.5 * s.outer_diameter_m, 0.5 * s.flooded_diameter_m
-        lever = x_g - xc
-        inertia += ms * (s.length_m**2 / 12 + (ro**2 + ri**2) / 4 + lever**2)
-        inertia += mw * (s.length_m**2 / 12 + ri**2 / 4 + lever**2)
-        v = math.pi / 4 * s.outer_diameter_m**2 * s.length_m
-        volume += v
-        vol_moment += v * xc
-        ma = rho * s.ca_normal * math.pi / 4 * s.outer_diameter_m**2
-        s_hi, s_lo = x_g - x, x_g - x - s.length_m  # axial coordinates (+ towards tip) of the section ends
-        a0 += ma * (s_hi - s_lo)
-        a1 += ma * (s_hi**2 - s_lo**2) / 2
-        a2 += ma * (s_hi**3 - s_lo**3) / 3
-    counts = _quadrature_counts([s.length_m for _, s in rows], anchor.quadrature_points)
-    quad = []
-    for (x, s), n in zip(rows, counts, strict=True):
-        ds = s.length_m / n
-        for k in range(n):
-            xq = x + (k + 0.5) * ds
-            quad.append([x_g - xq, ds, s.cd_normal * s.outer_diameter_m, s.cd_tangential * math.pi * s.outer_diameter_m])
-    first, last = anchor.sections[0], anchor.sections[-1]
-    props = AnchorProperties(
-        mass_kg=mass, structural_mass_kg=m_struct, flooded_water_kg=m_water, displaced_volume_m3=volume,
-        cog_from_tip_m=x_g, inertia_kg_m2=inertia, s_buoyancy_m=x_g - vol_moment / volume, s_tip_m=x_g,
-        s_back_m=x_g - length, added_mass=(a0, a1, a2), quadrature=np.array(quad),
-        tip_cda_m2=anchor.tip_drag_coefficient * math.pi / 4 * first.outer_diameter_m**2,
-        back_cda_m2=anchor.back_drag_coefficient * math.pi / 4 * last.outer_diameter_m**2, length_m=length,
-        water_density_kg_m3=rho,
-    )
-    return props
-
-
-def _quadrature_counts(lengths: list[float], total: int) -> list[int]:
-    full = sum(lengths)
-    counts = [max(1, int(round(total * ln / full))) for ln in lengths]
-    return counts
-
-
-def _body_arrays(props: AnchorProperties, scene: SceneConfig, point_masses: list[tuple[float, float]]):
-    g = scene.environment.gravity_m_s2
-    rho = scene.environment.water_density_kg_m3
-    a0, a1, a2 = props.added_mass
-    mp = sum(m for m, _ in point_masses)
-    mps = sum(m * s for m, s in point_masses)
-    mps2 = sum(m * s * s for m, s in point_masses)
-    body_f = np.zeros(L.N_BODY_F)
-    body_f[L.BF_ACTIVE] = 1.0
-    body_f[L.BF_MASS_AXIAL] = props.mass_kg + mp
-    body_f[L.BF_M11] = props.mass_kg + a0 + mp
-    body_f[L.BF_M12] = a1 + mps
-    body_f[L.BF_M22] = props.inertia_kg_m2 + a2 + mps2
-    body_f[L.BF_WEIGHT] = props.mass_kg * g
-    body_f[L.BF_BUOYANCY] = rho * g * props.displaced_volume_m3
-    body_f[L.BF_S_BUOY] = props.s_buoyancy_m
-    body_f[L.BF_S_TIP] = props.s_tip_m
-    body_f[L.BF_S_BACK] = props.s_back_m
-    body_f[L.BF_TIP_CDA] = props.tip_cda_m2
-    body_f[L.BF_BACK_CDA] = props.back_cda_m2
-    body_f[L.BF_LENGTH] = props.length_m
-    return body_f
-
-
 def compile_scene(scene: SceneConfig) -> Model:
     """Build the kernel arrays of a scene and derive its time step.
 
@@ -339,7 +138,7 @@ def compile_scene(scene: SceneConfig) -> Model:
     return model
 
 
-def _finish(scene: SceneConfig, b: _Builder, body_f, body_q, body_state0, line_names, vessel_base, **extra) -> Model:
+def _finish(scene: SceneConfig, b: MeshBuilder, body_f, body_q, body_state0, line_names, vessel_base, **extra) -> Model:
     mat_f, mat_names = _material_arrays(scene)
     env_f, profile = _env_arrays(scene)
     nn = len(b.node_kind)
@@ -390,7 +189,7 @@ def _compile_installation(scene: SceneConfig) -> Model:
     z_tip = seabed + inst.drop_height_m
     z_back = z_tip + props.length_m
     vessel_base = np.array([[0.0, 0.0, -inst.fairlead_depth_m], [inst.vessel_spacing_m, 0.0, -inst.fairlead_depth_m]])
-    b = _Builder()
+    b = MeshBuilder()
     line_names: list[tuple[str, list[str], list[float]]] = []
     point_masses: list[tuple[float, float]] = []
     release_node = wire_end = -1
@@ -436,7 +235,7 @@ def _compile_installation(scene: SceneConfig) -> Model:
             b.add_line(wire_end, top_a, [(_mat_index(scene, inst.wire_material), wire_len, disc.wire_segment_m)], pts,
                        payout=True, l_nom_top=disc.wire_segment_m)
             line_names.append(("wire", [inst.wire_material], [wire_len]))
-    body_f = _body_arrays(props, scene, point_masses)
+    body_f = body_arrays(props, scene, point_masses)
     body_state0 = np.zeros(L.N_BODY_STATE)
     body_state0[L.BS_POS + 2] = z_tip + props.s_tip_m
     body_state0[L.BS_AXIS + 2] = -1.0
@@ -451,7 +250,7 @@ def _compile_catenary_line(scene: SceneConfig) -> Model:
     line = scene.catenary_line
     assert line is not None
     depth = scene.environment.water_depth_m
-    b = _Builder()
+    b = MeshBuilder()
     anchor_pos = (line.anchor_x_m, 0.0, -depth)
     fair = np.array([[line.fairlead_x_m, 0.0, -line.fairlead_depth_m]])
     bottom = b.add_node(L.NODE_FIXED, anchor_pos)

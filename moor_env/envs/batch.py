@@ -1,19 +1,20 @@
 """Advance many simulators in one numba call: the integration of every env (single and batched).
 
-Each scene keeps its own arrays (node counts differ between scenes), so the kernel cannot take one stacked
-array per argument of the physics entry point :func:`moor_env.physics.integrate.advance`. It takes one int64
-*address table* instead: for every scene and every array argument of ``advance`` (``_ARRAY_ARGS``), the
-array's data address and shape. :func:`advance_many` rebuilds each array as a view on that memory
-(``numba.carray``) and calls ``advance`` for each scene in a loop, without the GIL.
+Each scene keeps its own arrays (node counts differ between scenes), so the kernel cannot take one stacked array
+per field. It takes one int64 *address table* instead: for every scene, the rows of its model and state records
+(``physics/records.py``), then those of its slot's outputs (:data:`SlotRecord`) and of the backup of its state, in
+that order (``ROW_*``; ``physics/record_table.py`` writes and checks the rows). :func:`advance_many` rebuilds each
+scene's records as views on that memory and calls the physics entry point
+:func:`moor_env.physics.integrate.advance` for each scene in a loop, without the GIL; a field added to the records
+is in the table with no edit here.
 
-Why addresses: numba unboxes every array argument on every call, with the GIL held. Passed as arrays (a tuple
-of 8 arrays per argument, 232 arrays) they would cost 56-75 us per call before the first step (measured with
-nothing to integrate), a fifth of a calm scene's control step; the kernel takes four small arrays whatever the
-number of scenes, and a one-scene call with nothing to integrate costs 16 us, most of it the load evaluation the
-kernel does (below). The addresses stay valid because :class:`BatchAdvancer` keeps
-every listed array referenced while its entry is in use, checks dtype, rank and C layout when it builds an
-entry, and rebuilds the entry when the simulator's state object changes (the arrays of one state are never
-replaced; ``set_vessel_motion`` may replace the vessel tracks, whose row is refreshed on every call).
+Why addresses: numba unboxes every array argument on every call, with the GIL held. Passed as arrays (a tuple of 8
+arrays per argument, 232 arrays) they would cost 56-75 us per call before the first step (measured with nothing to
+integrate), a fifth of a calm scene's control step; the kernel takes four small arrays whatever the number of
+scenes, and a one-scene call with nothing to integrate costs 16 us, most of it the load evaluation the kernel does
+(below). The addresses stay valid because :class:`BatchAdvancer` keeps every record referenced while its entry is
+in use, checks dtype, rank and C layout when it builds an entry, and rebuilds the entry when the simulator's
+records change (``Simulator.records``: a new state object, new work arrays, new vessel tracks).
 
 After each scene's advance the kernel evaluates the loads and the lines' top tensions at the state reached
 (unless it blew up), so the observation's tensions (``Simulator.top_tensions_n``) need no second kernel call and
@@ -35,9 +36,6 @@ Why no ``prange``: the threading layer available here is GNU OpenMP, which is no
 ``AsyncVectorEnv`` forked after a parallel region aborts), and numba's fork-safe ``workqueue`` layer is not
 thread-safe. The batched env instead calls this GIL-free kernel from ``num_threads`` Python threads on
 disjoint groups of scenes of about equal cost (:func:`balanced_groups`; one numba call per group).
-
-The argument list mirrors ``Simulator.advance_to``; if the physics changes ``advance``'s signature, this module
-follows (``_ARRAY_ARGS``, ``_sources`` and the views in :func:`advance_many`).
 """
 
 from __future__ import annotations
@@ -45,47 +43,36 @@ from __future__ import annotations
 import math
 import time
 import weakref
+from collections import namedtuple
 from concurrent.futures import ThreadPoolExecutor
 
 import numba
 import numpy as np
-from numba import types
-from numba.extending import intrinsic
 
 from moor_env.errors import SimulationDiverged
 from moor_env.physics import layout as L
 from moor_env.physics.anchor import tilt_deg
 from moor_env.physics.environment import current_velocity
-from moor_env.physics.integrate import advance, compute_accelerations
+from moor_env.physics.integrate import advance
 from moor_env.physics.line import top_tensions
+from moor_env.physics.loads import compute_accelerations
+from moor_env.physics.record_table import N_TABLE_COLUMNS, copy_rows, record_from_table, table_rows
+from moor_env.physics.records import F8, I8, MODEL_FIELDS, STATE_FIELDS, STATE_NAMES, Field, ModelRecord, StateRecord
 from moor_env.physics.vessels import track_state
-from moor_env.simulation import STATE_ARRAY_FIELDS, SimState, Simulator
+from moor_env.simulator import SimState, Simulator
 
-# (name, dtype, ndim) of every per-scene array argument of ``advance``, in call order
-_ARRAY_ARGS: tuple[tuple[str, type, int], ...] = (
-    ("node_pos", np.float64, 2), ("node_vel", np.float64, 2), ("body_state", np.float64, 1),
-    ("node_i", np.int64, 2), ("node_f", np.float64, 2), ("seg_i", np.int64, 2), ("seg_f", np.float64, 2),
-    ("mat_f", np.float64, 2), ("line_i", np.int64, 2), ("line_f", np.float64, 2), ("body_f", np.float64, 1),
-    ("body_q", np.float64, 2), ("env_f", np.float64, 1), ("current_profile", np.float64, 2),
-    ("tracks", np.float64, 3), ("node_force", np.float64, 2), ("node_mm", np.float64, 2),
-    ("node_mass", np.float64, 1), ("node_contact", np.float64, 1), ("node_acc", np.float64, 2),
-    ("seg_tension", np.float64, 1), ("body_load", np.float64, 1), ("body_acc", np.float64, 1),
-    ("pos0", np.float64, 2), ("vel0", np.float64, 2), ("body0", np.float64, 1), ("touchdown", np.float64, 1),
-    ("hist", np.float64, 2), ("hist_count", np.int64, 1),
-)
-# after them, the per-scene arrays the kernel writes its outputs into, what it reads to measure, and the backup
-# of the state (the arrays of ``SimState``, in its field order)
-_OUTPUT_ARGS: tuple[tuple[str, type, int], ...] = (
-    ("top_tension", np.float64, 1), ("measures", np.float64, 1), ("measure_spec", np.int64, 1),
-    ("backup_node_pos", np.float64, 2), ("backup_node_vel", np.float64, 2), ("backup_body_state", np.float64, 1),
-    ("backup_node_i", np.int64, 2), ("backup_node_f", np.float64, 2), ("backup_seg_i", np.int64, 2),
-    ("backup_seg_f", np.float64, 2), ("backup_line_i", np.int64, 2), ("backup_line_f", np.float64, 2),
-)
-_TABLE_ARGS = _ARRAY_ARGS + _OUTPUT_ARGS
-_TRACKS = [name for name, _, _ in _ARRAY_ARGS].index("tracks")
+SlotRecord = namedtuple("SlotRecord", ["measures", "measure_spec"])
+SlotRecord.__doc__ = "An env slot's arrays for the kernel: its measures (``M_*``) and what to measure (``SPEC_*``)."
+SlotRecord.FIELDS = (Field("measures", F8, 1), Field("measure_spec", I8, 1))
+# the rows of a scene in the address table: its model record, state record, slot record and the state's backup
+ROW_MODEL = 0
+ROW_STATE = ROW_MODEL + len(ModelRecord.FIELDS)
+ROW_SLOT = ROW_STATE + len(StateRecord.FIELDS)
+ROW_BACKUP = ROW_SLOT + len(SlotRecord.FIELDS)
+N_ROWS = ROW_BACKUP + len(STATE_FIELDS)
 # columns of a scene's per-call scalars (float64 table) and results (int64 / float64 tables)
-IN_T, IN_T_END, IN_DT, IN_INTEGRATOR, IN_BODY_ACTIVE, IN_DETECT, IN_BACKUP = range(7)
-N_IN = 7
+IN_T, IN_T_END, IN_DT, IN_INTEGRATOR, IN_DETECT, IN_BACKUP = range(6)
+N_IN = 6
 OUT_STATUS, OUT_STEPS, OUT_FAIL_KIND, OUT_FAIL_INDEX = range(4)
 
 # what the kernel measures after an advance for an env slot's observation (``SlotBuffers.measures``)
@@ -107,43 +94,6 @@ N_MEASURES = 18
 # measure_spec entries (-1: none)
 SPEC_RELEASE_NODE, SPEC_LINE, SPEC_MATERIAL, SPEC_WIRE, SPEC_VESSEL = range(5)
 N_SPEC = 5
-
-
-@intrinsic
-def _address_pointer(typingctx, address):
-    """An int64 memory address as a ``void*`` (for ``numba.carray``)."""
-    if address != types.int64:
-        return None
-
-    def codegen(context, builder, signature, args):
-        return builder.inttoptr(args[0], context.get_value_type(types.voidptr))
-
-    return types.voidptr(types.int64), codegen
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def _f64_1d(row):
-    return numba.carray(_address_pointer(row[0]), (row[1],), np.float64)
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def _f64_2d(row):
-    return numba.carray(_address_pointer(row[0]), (row[1], row[2]), np.float64)
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def _f64_3d(row):
-    return numba.carray(_address_pointer(row[0]), (row[1], row[2], row[3]), np.float64)
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def _i64_1d(row):
-    return numba.carray(_address_pointer(row[0]), (row[1],), np.int64)
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def _i64_2d(row):
-    return numba.carray(_address_pointer(row[0]), (row[1], row[2]), np.int64)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -170,11 +120,12 @@ def line_summary(node_pos, seg_i, seg_f, line_i, line, material):
 
 
 @numba.njit(cache=True, nogil=True)
-def measure_scene(t, node_pos, node_vel, body_state, seg_i, seg_f, line_i, body_f, env_f, current_profile, tracks,
-                  top_tension, spec, out):
-    """The ``M_*`` quantities of a scene at time ``t`` [s] into ``out`` (the lines' top tensions ``top_tension``
-    [N] already evaluated at this state); ``spec`` names the release node, the line and material to summarise,
-    the wire line and the vessel whose heave is read (``SPEC_*``, -1: none)."""
+def measure_scene(model, state, t, spec, out):
+    """The ``M_*`` quantities of a scene at time ``t`` [s] into ``out`` (the lines' top tensions
+    ``state.top_tension`` [N] already evaluated at this state); ``spec`` names the release node, the line and
+    material to summarise, the wire line and the vessel whose heave is read (``SPEC_*``, -1: none)."""
+    env_f, node_pos, node_vel = model.env_f, state.node_pos, state.node_vel
+    body_state, top_tension = state.body_state, state.top_tension
     ex = body_state[L.BS_AXIS]
     ey = body_state[L.BS_AXIS + 1]
     ez = body_state[L.BS_AXIS + 2]
@@ -187,17 +138,18 @@ def measure_scene(t, node_pos, node_vel, body_state, seg_i, seg_f, line_i, body_
                                                     + (wz - w_axial * ez) ** 2))
     out[M_HEAVE_M] = out[M_HEAVE_RATE_M_S] = 0.0
     if spec[SPEC_VESSEL] >= 0:
-        _, _, hz, _, _, hvz = track_state(tracks, spec[SPEC_VESSEL], t, env_f)
+        _, _, hz, _, _, hvz = track_state(model.tracks, spec[SPEC_VESSEL], t, env_f)
         out[M_HEAVE_M] = hz
         out[M_HEAVE_RATE_M_S] = hvz
-    cx, cy, _ = current_velocity(0.0, env_f, current_profile)
+    cx, cy, _ = current_velocity(0.0, env_f, model.current_profile)
     out[M_CURRENT_X_M_S] = cx
     out[M_CURRENT_Y_M_S] = cy
-    out[M_TIP_Z_M] = body_state[L.BS_POS + 2] + body_f[L.BF_S_TIP] * ez
+    out[M_TIP_Z_M] = body_state[L.BS_POS + 2] + model.body_f[L.BF_S_TIP] * ez
     out[M_LOOP_Z_M] = out[M_FIBRE_Z_M] = math.inf
     out[M_LINE_L0_M] = out[M_LINE_TENSION_N] = 0.0
     if spec[SPEC_LINE] >= 0:
-        loop_z, fibre_z, length = line_summary(node_pos, seg_i, seg_f, line_i, spec[SPEC_LINE], spec[SPEC_MATERIAL])
+        loop_z, fibre_z, length = line_summary(node_pos, state.seg_i, state.seg_f, state.line_i, spec[SPEC_LINE],
+                                               spec[SPEC_MATERIAL])
         out[M_LOOP_Z_M] = loop_z
         out[M_FIBRE_Z_M] = fibre_z
         out[M_LINE_L0_M] = length
@@ -209,13 +161,6 @@ def measure_scene(t, node_pos, node_vel, body_state, seg_i, seg_f, line_i, body_
         out[M_RELEASE_VEL + c] = node_vel[node, c] if node >= 0 else 0.0
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _copy2(src, dst):
-    for r in range(src.shape[0]):
-        for c in range(src.shape[1]):
-            dst[r, c] = src[r, c]
-
-
 @numba.njit(cache=True, nogil=True)
 def advance_many(scalars, addresses, out_i, out_t):
     """``advance`` for every scene of the tables, then the loads at the state reached.
@@ -223,11 +168,10 @@ def advance_many(scalars, addresses, out_i, out_t):
     Parameters
     ----------
     scalars : float64[n, N_IN]
-        t, t_end, dt [s], integrator code, body active (0/1), detect touchdown (0/1), back the state up first (0/1)
-        (``IN_*`` columns).
-    addresses : int64[n, len(_TABLE_ARGS), 4]
-        Data address and shape of each array argument of ``advance`` and of each output array
-        (``_OUTPUT_ARGS``; see the module docstring).
+        t, t_end, dt [s], integrator code, detect touchdown (0/1), back the state up first (0/1) (``IN_*``
+        columns).
+    addresses : int64[n, N_ROWS, record_table.N_TABLE_COLUMNS]
+        Each scene's table rows (``ROW_*``; see the module docstring).
     out_i : int64[n, 4]
         Status, steps taken, failing component kind and index (``OUT_*`` columns).
     out_t : float64[n]
@@ -235,40 +179,20 @@ def advance_many(scalars, addresses, out_i, out_t):
     """
     for i in range(scalars.shape[0]):
         a = addresses[i]
-        node_pos, node_vel, body_state = _f64_2d(a[0]), _f64_2d(a[1]), _f64_1d(a[2])
-        node_i, node_f, seg_i, seg_f = _i64_2d(a[3]), _f64_2d(a[4]), _i64_2d(a[5]), _f64_2d(a[6])
-        mat_f, line_i, line_f, body_f = _f64_2d(a[7]), _i64_2d(a[8]), _f64_2d(a[9]), _f64_1d(a[10])
-        body_q, env_f, current_profile, tracks = _f64_2d(a[11]), _f64_1d(a[12]), _f64_2d(a[13]), _f64_3d(a[14])
-        node_force, node_mm, node_mass = _f64_2d(a[15]), _f64_2d(a[16]), _f64_1d(a[17])
-        node_contact, node_acc, seg_tension = _f64_1d(a[18]), _f64_2d(a[19]), _f64_1d(a[20])
-        body_load, body_acc, pos0, vel0 = _f64_1d(a[21]), _f64_1d(a[22]), _f64_2d(a[23]), _f64_2d(a[24])
-        body0, touchdown, hist, hist_count = _f64_1d(a[25]), _f64_1d(a[26]), _f64_2d(a[27]), _i64_1d(a[28])
-        top_tension, measures, spec = _f64_1d(a[29]), _f64_1d(a[30]), _i64_1d(a[31])
+        model = record_from_table(ModelRecord, a, ROW_MODEL)
+        state = record_from_table(StateRecord, a, ROW_STATE)
+        slot = record_from_table(SlotRecord, a, ROW_SLOT)
         if scalars[i, IN_BACKUP] != 0.0:
-            _copy2(node_pos, _f64_2d(a[32]))
-            _copy2(node_vel, _f64_2d(a[33]))
-            _f64_1d(a[34])[:] = body_state
-            _copy2(node_i, _i64_2d(a[35]))
-            _copy2(node_f, _f64_2d(a[36]))
-            _copy2(seg_i, _i64_2d(a[37]))
-            _copy2(seg_f, _f64_2d(a[38]))
-            _copy2(line_i, _i64_2d(a[39]))
-            _copy2(line_f, _f64_2d(a[40]))
-        body_active = scalars[i, IN_BODY_ACTIVE] != 0.0
+            copy_rows(a, ROW_STATE, ROW_BACKUP, N_ROWS - ROW_BACKUP)
         status, t_reached, n_steps, fail_kind, fail_index = advance(
-            scalars[i, IN_T], scalars[i, IN_T_END], scalars[i, IN_DT], np.int64(scalars[i, IN_INTEGRATOR]),
-            body_active, scalars[i, IN_DETECT] != 0.0, node_pos, node_vel, body_state, node_i, node_f, seg_i,
-            seg_f, mat_f, line_i, line_f, body_f, body_q, env_f, current_profile, tracks, node_force, node_mm,
-            node_mass, node_contact, node_acc, seg_tension, body_load, body_acc, pos0, vel0, body0, touchdown, hist,
-            hist_count, 0)
+            model, state, scalars[i, IN_T], scalars[i, IN_T_END], scalars[i, IN_DT],
+            np.int64(scalars[i, IN_INTEGRATOR]), scalars[i, IN_DETECT] != 0.0, 0)
         if status < L.STATUS_NONFINITE:
-            compute_accelerations(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f, mat_f,
-                                  line_f, body_f, body_q, env_f, current_profile, node_force, node_mm, node_mass,
-                                  node_contact, node_acc, seg_tension, body_load, body_acc)
-            top_tensions(line_i, seg_i, node_i, node_force, seg_tension, top_tension)
-            if spec.shape[0] == N_SPEC:
-                measure_scene(t_reached, node_pos, node_vel, body_state, seg_i, seg_f, line_i, body_f, env_f,
-                              current_profile, tracks, top_tension, spec, measures)
+            compute_accelerations(model, state)
+            top_tensions(state.line_i, state.seg_i, state.node_i, state.node_force, state.seg_tension,
+                         state.top_tension)
+            if slot.measure_spec.shape[0] == N_SPEC:
+                measure_scene(model, state, t_reached, slot.measure_spec, slot.measures)
         out_i[i, OUT_STATUS] = status
         out_i[i, OUT_STEPS] = n_steps
         out_i[i, OUT_FAIL_KIND] = fail_kind
@@ -322,64 +246,38 @@ class SlotBuffers:
         return self._values
 
 
-_NO_SPEC = np.zeros(0, dtype=np.int64)  # a job without SlotBuffers: the kernel measures nothing
-_NO_MEASURES = np.zeros(0)
-
-
-def _sources(sim: Simulator, buffers: SlotBuffers | None) -> dict[str, np.ndarray]:
-    """The simulator's (and the slot's) arrays by the kernel's argument names; without a backup, the state's own
-    arrays stand in for the backup's (the kernel writes them only for an advance that takes a backup)."""
-    st, m, w = sim.state, sim.model, sim.work
-    backup = st if buffers is None or buffers.backup is None else buffers.backup
-    if backup is not st:
-        for name in STATE_ARRAY_FIELDS:
-            if getattr(backup, name).shape != getattr(st, name).shape:
-                raise TypeError(f"backup array '{name}' is {getattr(backup, name).shape}, the state's "
-                                f"{getattr(st, name).shape}")
-    return {
-        "measures": _NO_MEASURES if buffers is None else buffers.measures,
-        "measure_spec": _NO_SPEC if buffers is None else buffers.spec,
-        **{f"backup_{name}": getattr(backup, name) for name in STATE_ARRAY_FIELDS},
-        "node_pos": st.node_pos, "node_vel": st.node_vel, "body_state": st.body_state, "node_i": st.node_i,
-        "node_f": st.node_f, "seg_i": st.seg_i, "seg_f": st.seg_f, "mat_f": m.mat_f, "line_i": st.line_i,
-        "line_f": st.line_f, "body_f": m.body_f, "body_q": m.body_q, "env_f": sim.env_f,
-        "current_profile": m.current_profile, "tracks": sim.tracks, "node_force": w.node_force,
-        "node_mm": w.node_mm, "node_mass": w.node_mass, "node_contact": w.node_contact, "node_acc": w.node_acc,
-        "seg_tension": w.seg_tension, "body_load": w.body_load, "body_acc": w.body_acc, "pos0": w.pos0,
-        "vel0": w.vel0, "body0": w.body0, "touchdown": w.touchdown, "hist": w.hist, "hist_count": w.hist_count,
-        "top_tension": w.top_tension,
-    }
-
-
-def _address_row(name: str, arr: np.ndarray, dtype: type, ndim: int) -> list[int]:
-    """Address and shape of one array argument, after checking it is what the kernel will read it as."""
-    if arr.dtype != dtype or arr.ndim != ndim or not arr.flags.c_contiguous:
-        raise TypeError(f"simulator array '{name}' is {arr.dtype}[{arr.ndim}d], expected C-contiguous "
-                        f"{np.dtype(dtype)}[{ndim}d]")
-    return [arr.ctypes.data, *arr.shape, *([0] * (3 - ndim))]
+_NO_SLOT = SlotRecord(np.zeros(0), np.zeros(0, dtype=np.int64))  # a job without SlotBuffers: nothing measured
 
 
 class _Entry:
-    """A simulator's address table for one state object (and slot buffers and backup), with the arrays it points
+    """A simulator's address table for its current records, slot buffers and backup, with the records it points
     into (kept alive)."""
 
-    __slots__ = ("state", "buffers", "backup", "arrays", "table")
+    __slots__ = ("records", "buffers", "backup", "table")
 
-    def __init__(self, sim: Simulator, buffers: SlotBuffers | None) -> None:
-        sources = _sources(sim, buffers)
-        self.state = sim.state
+    def __init__(self, sim: Simulator, records: tuple, buffers: SlotBuffers | None) -> None:
+        model, state = records
+        st = sim.state
+        # without a backup the state's own arrays stand in for the backup's (written only by an advance that
+        # takes a backup, which needs one)
+        backup = st if buffers is None or buffers.backup is None else buffers.backup
+        if backup is not st:
+            for name in STATE_NAMES:
+                if getattr(backup, name).shape != getattr(st, name).shape:
+                    raise TypeError(f"backup array '{name}' is {getattr(backup, name).shape}, the state's "
+                                    f"{getattr(st, name).shape}")
+        slot = _NO_SLOT if buffers is None else SlotRecord(buffers.measures, buffers.spec)
+        self.records = (model, state, slot, backup)
         self.buffers = buffers
         self.backup = None if buffers is None else buffers.backup
-        self.arrays = [sources[name] for name, _, _ in _TABLE_ARGS]
-        self.table = np.array([_address_row(name, sources[name], dtype, ndim) for name, dtype, ndim in _TABLE_ARGS],
-                              dtype=np.int64)
+        self.table = np.concatenate([table_rows(model), table_rows(state), table_rows(slot),
+                                     table_rows([getattr(backup, name) for name in STATE_NAMES], STATE_FIELDS)])
 
-    def refresh_tracks(self, tracks: np.ndarray) -> None:
-        """Point at the simulator's current vessel tracks (``set_vessel_motion`` may replace the array)."""
-        if self.arrays[_TRACKS] is not tracks:
-            name, dtype, ndim = _ARRAY_ARGS[_TRACKS]
-            self.table[_TRACKS] = _address_row(name, tracks, dtype, ndim)
-            self.arrays[_TRACKS] = tracks
+    def refresh_model(self, model: ModelRecord) -> None:
+        """Point at the simulator's current model record (``set_vessel_motion`` may replace the vessel tracks)."""
+        if self.records[0] is not model:
+            self.table[ROW_MODEL:ROW_MODEL + len(MODEL_FIELDS)] = table_rows(model)
+            self.records = (model, *self.records[1:])
 
 
 def _job_parts(job: tuple) -> tuple[Simulator, float, bool, float, SlotBuffers | None, bool]:
@@ -431,21 +329,22 @@ class BatchAdvancer:
         self.kernel_s = 0.0  # CPU time inside the kernel, summed over threads (benchmarks/bench_env.py)
 
     def _entry(self, sim: Simulator, buffers: SlotBuffers | None) -> _Entry:
-        """``sim``'s address table, cached while its state, slot buffers and backup are the same objects (the entry
-        holds them, so a new one can never pass for an old one; the entry goes with the simulator)."""
+        """``sim``'s address table, cached while its state record, slot buffers and backup are the same objects
+        (the entry holds them, so a new one can never pass for an old one; the entry goes with the simulator)."""
+        records = sim.records()
         entry = self._entries.get(sim)
-        if entry is None or entry.state is not sim.state or entry.buffers is not buffers or (
+        if entry is None or entry.records[1] is not records[1] or entry.buffers is not buffers or (
                 buffers is not None and entry.backup is not buffers.backup):
-            entry = _Entry(sim, buffers)
+            entry = _Entry(sim, records, buffers)
             self._entries[sim] = entry
-        entry.refresh_tracks(sim.tracks)
+        entry.refresh_model(records[0])
         return entry
 
     def _call(self, jobs: list[tuple]) -> tuple[np.ndarray, np.ndarray, float]:
         """One kernel call on the scenes of ``jobs``; returns ``out_i``, ``out_t`` and the kernel's CPU time."""
         n = len(jobs)
         scalars = np.empty((n, N_IN))
-        addresses = np.empty((n, len(_TABLE_ARGS), 4), dtype=np.int64)
+        addresses = np.empty((n, N_ROWS, N_TABLE_COLUMNS), dtype=np.int64)
         entries = []  # keeps every array referenced until the call returns
         for i, job in enumerate(jobs):
             sim, t_stop, detect, step_s, buffers, backup = _job_parts(job)
@@ -454,7 +353,7 @@ class BatchAdvancer:
             entry = self._entry(sim, buffers)
             entries.append(entry)
             addresses[i] = entry.table
-            scalars[i] = (sim.state.t, t_stop, step_s, sim.integrator_code, sim.model.body_active, detect, backup)
+            scalars[i] = (sim.state.t, t_stop, step_s, sim.integrator_code, detect, backup)
         out_i = np.zeros((n, 4), dtype=np.int64)
         out_t = np.zeros(n)
         t0 = time.thread_time()

@@ -35,11 +35,8 @@ def kernel_measures(sim: Simulator, buffers: SlotBuffers) -> list[float]:
     here where the state is not the one the kernel left (a reset without a warm-up)."""
     measured = buffers.current_measures(sim)
     if measured is None:
-        st = sim.state
         sim.top_tensions_n()  # the loads, where they are not current
-        measure_scene(st.t, st.node_pos, st.node_vel, st.body_state, st.seg_i, st.seg_f, st.line_i,
-                      sim.model.body_f, sim.env_f, sim.model.current_profile, sim.tracks, sim.work.top_tension,
-                      buffers.spec, buffers.measures)
+        measure_scene(*sim.records(), sim.state.t, buffers.spec, buffers.measures)
         measured = buffers.measures.tolist()
     return measured
 

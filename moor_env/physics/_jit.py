@@ -54,3 +54,12 @@ jit = functools.partial(numba.njit, cache=True, nogil=True, fastmath=FASTMATH_FL
 # ~30 % faster per implicit step (benchmarks/bench_implicit_step.py); results move by rounding only (1e-11 to
 # 1e-9 relative at touchdown).
 jit_step = functools.partial(jit, error_model="numpy")
+
+# ``jit_step`` without numba's reference counting (NRT), for the kernels that take the records
+# (``physics/records.py``) every time step and allocate nothing. numba increments and decrements the reference
+# count of every array argument it unpacks on each call, an atomic operation each, and a record holds about thirty
+# arrays: on the vertical chain that was about a tenth of an explicit step. Such a kernel may not allocate (numba
+# refuses to compile it) nor keep an array beyond the call. The implicit step's own entry points keep ``jit_step``:
+# without the calls LLVM inlines them into the step and fuses the anchor's acceleration update differently, which
+# moves results by rounding.
+jit_no_refcount = functools.partial(jit_step, _nrt=False)

@@ -1,7 +1,8 @@
-"""Time integration: assemble accelerations, step (symplectic Euler or RK2 midpoint), detect events.
+"""Time integration: step the state (the loads from ``physics/loads.py``), detect touchdown and blow-ups.
 
 ``advance`` is the one entry point called from Python: it steps from ``t`` to ``t_end`` (or to touchdown, or
-to a blow-up) with no Python work per step. Integrators:
+to a blow-up) with no Python work per step. Every kernel takes the model and state records of
+``physics/records.py`` first. Integrators:
 
 - ``symplectic_euler`` (default, one load evaluation per step): v += dt a(x, v); x += dt v. For an axial
   segment mode with damping ratio zeta it is stable for omega_n dt <= 2 (sqrt(1 + zeta^2) - zeta), and it
@@ -23,35 +24,23 @@ from __future__ import annotations
 
 import math
 
-from moor_env.physics._jit import jit_step
-from moor_env.physics.anchor import add_point_load, body_acceleration, body_loads, body_point, rotate_axis
-from moor_env.physics.environment import current_velocity
+from moor_env.physics._jit import jit_no_refcount, jit_step
+from moor_env.physics.anchor import body_point, rotate_axis
 from moor_env.physics.implicit import implicit_euler_update
 from moor_env.physics.layout import (
+    BF_ACTIVE,
     BF_S_TIP,
     BS_AXIS,
     BS_OMEGA,
     BS_POS,
     BS_VEL,
     EF_DEPTH,
-    EF_G,
-    EF_RHO,
-    EF_SEABED_SMOOTHING,
     EF_SPEED_LIMIT,
     EF_STRAIN_LIMIT,
     LI_NSEG,
     N_BODY_STATE,
-    NF_BODY_S,
-    NF_POINT_CA,
-    NF_POINT_CDA,
-    NF_POINT_MASS,
-    NF_POINT_VOLUME,
     NI_KIND,
-    NI_REF,
-    NODE_BODY,
     NODE_FREE,
-    NODE_VESSEL,
-    NODE_WELDED,
     STATUS_NONFINITE,
     STATUS_RUNNING,
     STATUS_SPEED_LIMIT,
@@ -63,10 +52,8 @@ from moor_env.physics.layout import (
     TD_TIP,
     TD_VEL,
 )
-from moor_env.physics.linalg3 import solve_sym3
-from moor_env.physics.line import apply_payout, segment_loads
-from moor_env.physics.seabed import seabed_force
-from moor_env.physics.vessels import track_state
+from moor_env.physics.line import apply_payout
+from moor_env.physics.loads import compute_accelerations, compute_loads, set_constrained_nodes
 
 INTEGRATOR_SYMPLECTIC_EULER = 0
 INTEGRATOR_RK2 = 1
@@ -76,128 +63,6 @@ FAIL_NONE = 0
 FAIL_NODE = 1
 FAIL_SEGMENT = 2
 FAIL_BODY = 3
-
-
-@jit_step
-def set_constrained_nodes(t, node_pos, node_vel, body_state, node_i, node_f, tracks, env_f):
-    """Place vessel, body-attached and welded nodes from their vessel track, the anchor or their parent."""
-    nn = node_i.shape[0]
-    for n in range(nn):
-        kind = node_i[n, NI_KIND]
-        if kind == NODE_VESSEL:
-            x, y, z, vx, vy, vz = track_state(tracks, node_i[n, NI_REF], t, env_f)
-        elif kind == NODE_BODY:
-            x, y, z, vx, vy, vz = body_point(body_state, node_f[n, NF_BODY_S])
-        else:
-            continue
-        node_pos[n, 0] = x
-        node_pos[n, 1] = y
-        node_pos[n, 2] = z
-        node_vel[n, 0] = vx
-        node_vel[n, 1] = vy
-        node_vel[n, 2] = vz
-    for n in range(nn):
-        if node_i[n, NI_KIND] == NODE_WELDED:
-            p = node_i[n, NI_REF]
-            for c in range(3):
-                node_pos[n, c] = node_pos[p, c]
-                node_vel[n, c] = node_vel[p, c]
-
-
-@jit_step
-def compute_accelerations(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f, mat_f,
-                          line_f, body_f, body_q, env_f, current_profile, node_force, node_mm, node_mass,
-                          node_contact, node_acc, seg_tension, body_load, body_acc):
-    """Loads and accelerations of every free node and the anchor at the current state.
-
-    Returns
-    -------
-    max_strain : float
-        Largest segment strain (NaN if any load is non-finite).
-    worst_segment : int
-    """
-    max_strain, worst = compute_loads(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f,
-                                      mat_f, line_f, body_f, body_q, env_f, current_profile, node_force, node_mm,
-                                      node_mass, node_contact, seg_tension, body_load, body_acc)
-    for n in range(node_i.shape[0]):
-        if node_i[n, NI_KIND] == NODE_FREE:
-            ax, ay, az = solve_sym3(node_mass[n], node_mm[n, 0], node_mm[n, 1], node_mm[n, 2], node_mm[n, 3],
-                                    node_mm[n, 4], node_mm[n, 5], node_force[n, 0], node_force[n, 1],
-                                    node_force[n, 2])
-            node_acc[n, 0] = ax
-            node_acc[n, 1] = ay
-            node_acc[n, 2] = az
-    return max_strain, worst
-
-
-@jit_step
-def compute_loads(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f, mat_f, line_f, body_f,
-                  body_q, env_f, current_profile, node_force, node_mm, node_mass, node_contact, seg_tension,
-                  body_load, body_acc):
-    """Loads (forces, masses, added masses, contact areas, tensions) of every node and the anchor's acceleration.
-
-    The free nodes' accelerations are left to the caller: the implicit step solves for them with the lines'
-    stiffness, so it skips ``compute_accelerations``' explicit solve.
-    """
-    rho = env_f[EF_RHO]
-    g = env_f[EF_G]
-    nn = node_i.shape[0]
-    for n in range(nn):
-        for c in range(3):
-            node_force[n, c] = 0.0
-        for c in range(6):
-            node_mm[n, c] = 0.0
-        node_mass[n] = 0.0
-        node_contact[n] = 0.0
-    max_strain, worst = segment_loads(node_pos, node_vel, seg_i, seg_f, mat_f, line_f, env_f, current_profile,
-                                      node_force, node_mm, node_mass, node_contact, seg_tension)
-    for n in range(nn):
-        kind = node_i[n, NI_KIND]
-        if kind != NODE_FREE and kind != NODE_WELDED:
-            continue
-        pm = node_f[n, NF_POINT_MASS]
-        vol = node_f[n, NF_POINT_VOLUME]
-        if pm > 0.0 or vol > 0.0:
-            node_mass[n] += pm
-            node_force[n, 2] -= (pm - rho * vol) * g
-            ma = rho * vol * node_f[n, NF_POINT_CA]
-            node_mm[n, 0] += ma
-            node_mm[n, 1] += ma
-            node_mm[n, 2] += ma
-            cda = node_f[n, NF_POINT_CDA]
-            if cda > 0.0:
-                ux, uy, uz = current_velocity(node_pos[n, 2], env_f, current_profile)
-                rx = ux - node_vel[n, 0]
-                ry = uy - node_vel[n, 1]
-                rz = uz - node_vel[n, 2]
-                k = 0.5 * rho * cda * math.sqrt(rx * rx + ry * ry + rz * rz)
-                node_force[n, 0] += k * rx
-                node_force[n, 1] += k * ry
-                node_force[n, 2] += k * rz
-        if node_pos[n, 2] < -env_f[EF_DEPTH] or env_f[EF_SEABED_SMOOTHING] > 0.0:
-            fx, fy, fz = seabed_force(node_pos[n, 2], node_vel[n, 0], node_vel[n, 1], node_vel[n, 2],
-                                      node_contact[n], env_f)
-            node_force[n, 0] += fx
-            node_force[n, 1] += fy
-            node_force[n, 2] += fz
-    for n in range(nn):
-        if node_i[n, NI_KIND] == NODE_WELDED:
-            p = node_i[n, NI_REF]
-            for c in range(3):
-                node_force[p, c] += node_force[n, c]
-            for c in range(6):
-                node_mm[p, c] += node_mm[n, c]
-            node_mass[p] += node_mass[n]
-    if body_active:
-        for c in range(6):
-            body_load[c] = 0.0
-        body_loads(body_state, body_f, body_q, env_f, current_profile, body_load)
-        for n in range(nn):
-            if node_i[n, NI_KIND] == NODE_BODY:
-                add_point_load(body_load, body_state, node_f[n, NF_BODY_S], node_force[n, 0], node_force[n, 1],
-                               node_force[n, 2])
-        body_acceleration(body_state, body_f, body_load, body_acc)
-    return max_strain, worst
 
 
 @jit_step
@@ -237,13 +102,11 @@ def _kick_drift_body(body_state, body_acc, body0, dt_v, dt_x, wx, wy, wz, dt_rot
 
 
 @jit_step
-def step(t, dt, integrator, body_active, node_pos, node_vel, body_state, node_i, node_f, seg_i, seg_f, mat_f,
-         line_i, line_f, body_f, body_q, env_f, current_profile, tracks, node_force, node_mm, node_mass,
-         node_contact, node_acc, seg_tension, body_load, body_acc, pos0, vel0, body0, same_topology):
-    """One time step of length ``dt`` from time ``t``.
+def step(model, state, t, dt, integrator, same_topology):
+    """One time step of length ``dt`` [s] from time ``t`` [s].
 
-    ``same_topology``: the nodes and segments are those of the previous step on this workspace (the implicit
-    step then keeps its elimination order).
+    ``same_topology``: the nodes and segments are those of the previous step on this state (the implicit step
+    then keeps its elimination order).
 
     Returns
     -------
@@ -252,15 +115,15 @@ def step(t, dt, integrator, body_active, node_pos, node_vel, body_state, node_i,
     fail_kind, fail_index : int
         Component of a blow-up (FAIL_NODE / FAIL_SEGMENT / FAIL_BODY and its index).
     """
+    env_f, node_pos, node_vel = model.env_f, state.node_pos, state.node_vel
+    body_state, node_i, node_acc = state.body_state, state.node_i, state.node_acc
+    body_acc, pos0, vel0 = state.body_acc, state.pos0, state.vel0
+    body0 = state.body0
+    body_active = model.body_f[BF_ACTIVE] != 0.0
     if integrator == INTEGRATOR_IMPLICIT_EULER:
-        args_strain = compute_loads(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f,
-                                    mat_f, line_f, body_f, body_q, env_f, current_profile, node_force, node_mm,
-                                    node_mass, node_contact, seg_tension, body_load, body_acc)
+        args_strain = compute_loads(model, state)
     else:
-        args_strain = compute_accelerations(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i,
-                                            seg_f, mat_f, line_f, body_f, body_q, env_f, current_profile,
-                                            node_force, node_mm, node_mass, node_contact, node_acc, seg_tension,
-                                            body_load, body_acc)
+        args_strain = compute_accelerations(model, state)
     max_strain = args_strain[0]
     worst_seg = args_strain[1]
     for c in range(N_BODY_STATE):
@@ -274,11 +137,7 @@ def step(t, dt, integrator, body_active, node_pos, node_vel, body_state, node_i,
             wz = body0[BS_OMEGA + 2] + dt * body_acc[5]
             body_v2 = _kick_drift_body(body_state, body_acc, body0, dt, dt, wx, wy, wz, dt)
     elif integrator == INTEGRATOR_IMPLICIT_EULER:
-        vmax2, worst_node, body_v2 = implicit_euler_update(dt, body_active, node_pos, node_vel, body_state, node_i,
-                                                           node_f, seg_i, seg_f, mat_f, body_f, env_f,
-                                                           current_profile, node_force, node_mm, node_mass,
-                                                           node_contact, node_acc, seg_tension, body_acc, pos0,
-                                                           vel0, body0, same_topology)
+        vmax2, worst_node, body_v2 = implicit_euler_update(model, state, dt, same_topology)
     else:
         for n in range(node_i.shape[0]):
             for c in range(3):
@@ -297,10 +156,8 @@ def step(t, dt, integrator, body_active, node_pos, node_vel, body_state, node_i,
                 body_state[BS_OMEGA + c] = body0[BS_OMEGA + c] + 0.5 * dt * body_acc[3 + c]
             rotate_axis(body_state, body0[BS_AXIS:BS_AXIS + 3], body0[BS_OMEGA], body0[BS_OMEGA + 1],
                         body0[BS_OMEGA + 2], 0.5 * dt)
-        set_constrained_nodes(t + 0.5 * dt, node_pos, node_vel, body_state, node_i, node_f, tracks, env_f)
-        mid = compute_accelerations(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f,
-                                    mat_f, line_f, body_f, body_q, env_f, current_profile, node_force, node_mm,
-                                    node_mass, node_contact, node_acc, seg_tension, body_load, body_acc)
+        set_constrained_nodes(model, state, t + 0.5 * dt)
+        mid = compute_accelerations(model, state)
         if not (mid[0] <= max_strain):
             max_strain = mid[0]
             worst_seg = mid[1]
@@ -327,8 +184,8 @@ def step(t, dt, integrator, body_active, node_pos, node_vel, body_state, node_i,
             rotate_axis(body_state, body0[BS_AXIS:BS_AXIS + 3], wx, wy, wz, dt)
             for c in range(3):
                 body_v2 += body_state[BS_VEL + c] ** 2
-    set_constrained_nodes(t + dt, node_pos, node_vel, body_state, node_i, node_f, tracks, env_f)
-    apply_payout(dt, node_pos, node_vel, node_i, seg_i, seg_f, line_i, line_f)
+    set_constrained_nodes(model, state, t + dt)
+    apply_payout(dt, node_pos, node_vel, node_i, state.seg_i, state.seg_f, state.line_i, state.line_f)
     if max_strain != max_strain:
         return STATUS_NONFINITE, FAIL_SEGMENT, worst_seg
     if vmax2 != vmax2:
@@ -345,12 +202,16 @@ def step(t, dt, integrator, body_active, node_pos, node_vel, body_state, node_i,
     return STATUS_RUNNING, FAIL_NONE, -1
 
 
-@jit_step
-def _record(hist, hist_count, t, body_state, body_f):
+@jit_no_refcount
+def _record(model, state, t):
+    """Append the tip state at time ``t`` [s] to the history (``hist``, ``hist_count[0]`` rows used)."""
+    hist = state.hist
+    hist_count = state.hist_count
+    body_state = state.body_state
     k = hist_count[0]
     if k >= hist.shape[0]:
         return
-    px, py, pz, vx, vy, vz = body_point(body_state, body_f[BF_S_TIP])
+    px, py, pz, vx, vy, vz = body_point(body_state, model.body_f[BF_S_TIP])
     hist[k, 0] = t
     hist[k, 1] = px
     hist[k, 2] = py
@@ -376,18 +237,15 @@ def _keep_segment_counts(line_i, nseg):
 
 
 @jit_step
-def advance(t, t_end, dt, integrator, body_active, detect_touchdown, node_pos, node_vel, body_state, node_i,
-            node_f, seg_i, seg_f, mat_f, line_i, line_f, body_f, body_q, env_f, current_profile, tracks,
-            node_force, node_mm, node_mass, node_contact, node_acc, seg_tension, body_load, body_acc, pos0, vel0,
-            body0, touchdown, hist, hist_count, hist_every):
-    """Step from ``t`` until the step nearest ``t_end``, touchdown of the anchor tip, or a blow-up.
+def advance(model, state, t, t_end, dt, integrator, detect_touchdown, hist_every):
+    """Step from ``t`` until the step nearest ``t_end`` [s], touchdown of the anchor tip, or a blow-up.
 
     Only whole steps of ``dt`` are taken, so the time reached is within dt/2 of ``t_end`` and a run split into
     several calls is bit-identical to one call.
 
-    Touchdown is interpolated linearly inside the step in which the tip crosses z = -depth: its time, tip
-    position, tip velocity and axis are written to ``touchdown``. Every ``hist_every`` steps the tip state is
-    appended to ``hist`` (``hist_count[0]`` rows used).
+    Touchdown (``detect_touchdown``) is interpolated linearly inside the step in which the tip crosses
+    z = -depth: its time, tip position, tip velocity and axis are written to ``state.touchdown``. Every
+    ``hist_every`` steps (0: never) the tip state is appended to ``state.hist``.
 
     Returns
     -------
@@ -398,11 +256,15 @@ def advance(t, t_end, dt, integrator, body_active, detect_touchdown, node_pos, n
     n_steps : int
     fail_kind, fail_index : int
     """
-    depth = env_f[EF_DEPTH]
-    s_tip = body_f[BF_S_TIP]
+    body_state = state.body_state
+    line_i = state.line_i
+    touchdown = state.touchdown
+    body_active = model.body_f[BF_ACTIVE] != 0.0
+    depth = model.env_f[EF_DEPTH]
+    s_tip = model.body_f[BF_S_TIP]
     n_steps = 0
     p0x = p0y = p0z = v0x = v0y = v0z = e0x = e0y = e0z = 0.0
-    set_constrained_nodes(t, node_pos, node_vel, body_state, node_i, node_f, tracks, env_f)
+    set_constrained_nodes(model, state, t)
     # whole steps only, so that splitting a run into calls never changes the step sequence (determinism)
     h = dt
     # the topology is trusted only from the second step of a call on: between calls the caller may release,
@@ -415,11 +277,7 @@ def advance(t, t_end, dt, integrator, body_active, detect_touchdown, node_pos, n
             e0x = body_state[BS_AXIS]
             e0y = body_state[BS_AXIS + 1]
             e0z = body_state[BS_AXIS + 2]
-        status, fail_kind, fail_index = step(t, h, integrator, body_active, node_pos, node_vel, body_state,
-                                             node_i, node_f, seg_i, seg_f, mat_f, line_i, line_f, body_f, body_q,
-                                             env_f, current_profile, tracks, node_force, node_mm, node_mass,
-                                             node_contact, node_acc, seg_tension, body_load, body_acc, pos0,
-                                             vel0, body0, same_topology)
+        status, fail_kind, fail_index = step(model, state, t, h, integrator, same_topology)
         same_topology = _keep_segment_counts(line_i, nseg)
         n_steps += 1
         if status != STATUS_RUNNING:
@@ -427,7 +285,7 @@ def advance(t, t_end, dt, integrator, body_active, detect_touchdown, node_pos, n
         t_prev = t
         t = t + h
         if hist_every > 0 and n_steps % hist_every == 0 and body_active:
-            _record(hist, hist_count, t, body_state, body_f)
+            _record(model, state, t)
         if detect_touchdown:
             p1x, p1y, p1z, v1x, v1y, v1z = body_point(body_state, s_tip)
             if p1z <= -depth:

@@ -116,16 +116,14 @@ def _set_smoothing(env_f, slack):
 @jit_step
 def _residual(body_node, basis, res_body, node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i,
               seg_f, mat_f, line_f, body_f, body_q, env_f, current_profile, tracks, node_force, node_mm, node_mass,
-              node_contact, seg_tension, body_load, body_acc):
+              node_contact, seg_tension, body_load, body_acc, model, state):
     """Loads at the current state (velocities zero); returns (sum of squared scaled residuals, largest one).
 
     A node's residual is scaled by its weight, the anchor's force by its weight and its moments by its weight
-    times its length.
+    times its length. ``model``, ``state``: the simulator's records (``physics/records.py``) of the same arrays.
     """
-    set_constrained_nodes(0.0, node_pos, node_vel, body_state, node_i, node_f, tracks, env_f)
-    compute_loads(node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i, seg_f, mat_f, line_f, body_f,
-                  body_q, env_f, current_profile, node_force, node_mm, node_mass, node_contact, seg_tension,
-                  body_load, body_acc)
+    set_constrained_nodes(model, state, 0.0)
+    compute_loads(model, state)
     g = env_f[L.EF_G]
     norm2 = 0.0
     worst = 0.0
@@ -379,7 +377,7 @@ def _apply(scale, nq, body_node, basis, dq, node_i, node_f, node_pos, node_acc, 
 def newton_statics(ctl, max_iter, body_node, node_pos, node_vel, body_state, body_active, node_i, node_f, seg_i,
                    seg_f, mat_f, line_f, body_f, body_q, env_f, current_profile, tracks, node_force, node_mm,
                    node_mass, node_contact, node_acc, seg_tension, body_load, body_acc, pos0, vel0, best_pos,
-                   best_body):
+                   best_body, model, state):
     """Up to ``max_iter`` Newton iterations of the static problem from the current state, in place.
 
     ``ctl`` (``C_*`` slots) carries the pseudo time step, the smoothing level, the tolerance and the step limit
@@ -411,7 +409,7 @@ def newton_statics(ctl, max_iter, body_node, node_pos, node_vel, body_state, bod
     _set_smoothing(env_f, ctl[C_SMOOTHING])
     norm2, worst = _residual(body_node, basis, res_body, node_pos, node_vel, body_state, body_active, node_i, node_f,
                              seg_i, seg_f, mat_f, line_f, body_f, body_q, env_f, current_profile, tracks, node_force,
-                             node_mm, node_mass, node_contact, seg_tension, body_load, body_acc)
+                             node_mm, node_mass, node_contact, seg_tension, body_load, body_acc, model, state)
     status = STATUS_RUNNING
     if ctl[C_BEST] == 0.0 or norm2 < ctl[C_BEST]:
         ctl[C_BEST] = norm2
@@ -432,7 +430,7 @@ def newton_statics(ctl, max_iter, body_node, node_pos, node_vel, body_state, bod
             norm2, worst = _residual(body_node, basis, res_body, node_pos, node_vel, body_state, body_active, node_i,
                                      node_f, seg_i, seg_f, mat_f, line_f, body_f, body_q, env_f, current_profile,
                                      tracks, node_force, node_mm, node_mass, node_contact, seg_tension, body_load,
-                                     body_acc)
+                                     body_acc, model, state)
             ctl[C_BEST] = norm2
             ctl[C_SINCE_BEST] = 0.0
             best_pos[:, :] = node_pos
@@ -467,7 +465,7 @@ def newton_statics(ctl, max_iter, body_node, node_pos, node_vel, body_state, bod
         new2, new_worst = _residual(body_node, basis, res_body, node_pos, node_vel, body_state, body_active, node_i,
                                     node_f, seg_i, seg_f, mat_f, line_f, body_f, body_q, env_f, current_profile,
                                     tracks, node_force, node_mm, node_mass, node_contact, seg_tension, body_load,
-                                    body_acc)
+                                    body_acc, model, state)
         if not (new2 == new2):
             # not finite: back to the saved state with a shorter pseudo time step
             node_pos[:, :] = saved
@@ -476,7 +474,7 @@ def newton_statics(ctl, max_iter, body_node, node_pos, node_vel, body_state, bod
             norm2, worst = _residual(body_node, basis, res_body, node_pos, node_vel, body_state, body_active, node_i,
                                      node_f, seg_i, seg_f, mat_f, line_f, body_f, body_q, env_f, current_profile,
                                      tracks, node_force, node_mm, node_mass, node_contact, seg_tension, body_load,
-                                     body_acc)
+                                     body_acc, model, state)
             continue
         ctl[C_LAST_STEP] = biggest * scale
         norm2 = new2
@@ -500,7 +498,7 @@ def newton_statics(ctl, max_iter, body_node, node_pos, node_vel, body_state, bod
                 norm2, worst = _residual(body_node, basis, res_body, node_pos, node_vel, body_state, body_active,
                                          node_i, node_f, seg_i, seg_f, mat_f, line_f, body_f, body_q, env_f,
                                          current_profile, tracks, node_force, node_mm, node_mass, node_contact,
-                                         seg_tension, body_load, body_acc)
+                                         seg_tension, body_load, body_acc, model, state)
     ctl[C_TAU] = tau
     ctl[C_SMOOTHING] = env_f[L.EF_SLACK_SMOOTHING]
     ctl[C_STATUS] = status
@@ -626,7 +624,8 @@ def _run_chunk(sim, ctl: np.ndarray, max_iter: int, tol_rel: float, best: tuple[
                               st.node_pos, st.node_vel, st.body_state, m.body_active, st.node_i, st.node_f, st.seg_i,
                               st.seg_f, m.mat_f, st.line_f, m.body_f, m.body_q, sim.env_f, m.current_profile,
                               sim.tracks, w.node_force, w.node_mm, w.node_mass, w.node_contact, w.node_acc,
-                              w.seg_tension, w.body_load, w.body_acc, w.pos0, w.vel0, best[0], best[1])
+                              w.seg_tension, w.body_load, w.body_acc, w.pos0, w.vel0, best[0], best[1],
+                              *sim.records())
     except np.linalg.LinAlgError as exc:  # the anchor's 5x5 system singular or not finite
         _set_smoothing(sim.env_f, 0.0)
         raise StaticsNotConverged(f"static Newton step failed: {exc}") from exc

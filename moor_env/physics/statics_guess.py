@@ -163,7 +163,7 @@ def first_guess(sim) -> int:
         The scene has none (the key to change is named).
     """
     st = sim.state
-    set_constrained_nodes(st.t, st.node_pos, st.node_vel, st.body_state, st.node_i, st.node_f, sim.tracks, sim.env_f)
+    set_constrained_nodes(*sim.records(), st.t)
     if sim.model.scene.kind == "catenary_line":
         line = sim.model.lines["line"].index
         _hang(sim, "line", st.node_pos[st.line_i[line, L.LI_BOTTOM]].copy(),
@@ -203,7 +203,7 @@ def _guess_installation(sim) -> int:
     b[L.BS_POS: L.BS_POS + 3] = back - m.body_f[L.BF_S_BACK] * b[L.BS_AXIS: L.BS_AXIS + 3]
     b[L.BS_VEL: L.BS_VEL + 3] = 0.0
     b[L.BS_OMEGA: L.BS_OMEGA + 3] = 0.0
-    set_constrained_nodes(st.t, st.node_pos, st.node_vel, st.body_state, st.node_i, st.node_f, sim.tracks, sim.env_f)
+    set_constrained_nodes(*sim.records(), st.t)
     return mode
 
 

@@ -131,8 +131,7 @@ class _Problem:
     def residual(self) -> np.ndarray:
         sim = self.sim
         st = sim.state
-        set_constrained_nodes(st.t, st.node_pos, st.node_vel, st.body_state, st.node_i, st.node_f, sim.tracks,
-                              sim.env_f)
+        set_constrained_nodes(*sim.records(), st.t)
         sim.evaluate_loads()
         r = np.zeros(self.n_dofs)
         r[: self.n_node_dofs] = sim.work.node_force[self.free].ravel()

@@ -50,7 +50,7 @@ def test_the_loads_record_goes_with_any_change_of_the_state(hanging_sim):
 
 def test_address_table_names_an_array_of_the_wrong_layout(hanging_sim):
     sim = hanging_sim
-    sim.work.node_force = np.zeros((sim.work.node_force.shape[0], 6))[:, :3]  # a strided view
+    sim.work = sim.work._replace(node_force=np.zeros((sim.work.node_force.shape[0], 6))[:, :3])  # a strided view
     with pytest.raises(TypeError, match="node_force"):
         _advance(sim)
 

@@ -16,8 +16,11 @@ from moor_env import SimulationDiverged, load_scene, simulate_drop, solve_static
 from moor_env.compile import compile_scene
 from moor_env.config import scene_dict, scene_from_dict
 from moor_env.physics import implicit as I
-from moor_env.physics import tree as T
+from moor_env.physics import implicit_active_set as S
 from moor_env.physics import layout as L
+from moor_env.physics import tree as T
+from moor_env.physics.implicit_assembly import assemble
+from moor_env.physics.records import ModelRecord, StateRecord
 from moor_env.simulation import run_drop
 
 IMPLICIT = {"integrator": "implicit_euler"}
@@ -120,28 +123,24 @@ def test_tree_solver_matches_a_dense_solve():
     body_node = int(np.nonzero(st.node_i[:, L.NI_KIND] == L.NODE_BODY)[0][0])
     tree = w.pos0.view(np.int64)
     orow = w.vel0.view(np.int64)
-    I._setup(body_node, st.node_i, st.seg_i, w.seg_tension, tree, orow)
-    nq = T.order(body_node, st.node_i, st.seg_i, tree, orow)
-    I._assemble(h, True, body_node, st.node_pos, st.node_vel, st.node_i, st.node_f, st.seg_i, st.seg_f, m.mat_f,
-                sim.env_f, m.current_profile, w.node_force, w.node_mm, w.node_mass, w.node_contact, w.node_acc,
-                w.seg_tension, orow)
+    model, state = sim.records()
+    nq = I.prepare(False, body_node, state, tree, orow)
+    assemble(h, True, body_node, model, state, orow)
     diag, rhs = w.node_mm.copy(), w.node_acc.copy()
-    eff = orow[:, I.OR_EFF].copy()
+    eff = orow[:, T.OR_EFF].copy()
     unknowns = [n for n in range(st.node_i.shape[0]) if eff[n] == n and n != body_node]
     assert nq == len(unknowns)
     edges = []
     for s in np.nonzero(st.seg_i[:, L.SI_ACTIVE])[0]:
         a, b = eff[st.seg_i[s, L.SI_A]], eff[st.seg_i[s, L.SI_B]]
         if a >= 0 and b >= 0 and a != b:
-            alpha, beta, qx, qy, qz, _, _ = I._segment_gain(s, h, orow, st.node_pos, st.seg_i, st.seg_f, m.mat_f,
+            alpha, beta, qx, qy, qz, _, _ = S.segment_gain(s, h, orow, st.node_pos, st.seg_i, st.seg_f, m.mat_f,
                                                            w.seg_tension)
             q = np.array([qx, qy, qz])
             edges.append((a, b, alpha * np.outer(q, q) + beta * np.eye(3)))
-    I._eliminate(h, nq, st.node_pos, st.seg_i, st.seg_f, m.mat_f, w.seg_tension, w.node_mm, w.node_acc, tree, orow)
-    corr = np.array(I._couple_body(h, body_node, st.body_state, st.node_f, m.body_f, w.body_acc, w.node_mm,
-                                   w.node_acc))
-    I._back_substitute(h, nq, st.node_pos, st.seg_i, st.seg_f, m.mat_f, w.seg_tension, w.node_mm, w.node_acc, tree,
-                       orow)
+    I.eliminate(h, nq, model, state, tree, orow)
+    corr = np.array(I.couple_body(h, body_node, model, state))
+    I.back_substitute(h, nq, model, state, tree, orow)
 
     def sym(v):
         return np.array([[v[0], v[3], v[4]], [v[3], v[1], v[5]], [v[4], v[5], v[2]]])
@@ -278,9 +277,9 @@ def test_implicit_runs_are_bit_identical():
 
 
 def _two_segment_column(dv_middle_z: float) -> tuple:
-    """A vertical column of three nodes (top held, two free) with the arrays ``_update_active_set`` reads: the
-    upper segment slack now, the lower taut; the solved dv of the middle node is ``dv_middle_z`` [m/s] and the
-    bottom node's is 0."""
+    """A vertical column of three nodes (top held, two free) with the arrays ``update_active_set`` reads (the
+    records' other arrays empty): the upper segment slack now, the lower taut; the solved dv of the middle node is
+    ``dv_middle_z`` [m/s] and the bottom node's is 0. Returns (model, state, orow)."""
     node_pos = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -0.999], [0.0, 0.0, -2.0]])
     node_vel = np.zeros((3, 3))
     seg_i = np.zeros((2, L.N_SEG_I), np.int64)
@@ -293,21 +292,27 @@ def _two_segment_column(dv_middle_z: float) -> tuple:
     node_acc = np.zeros((3, 3))
     node_acc[1, 2] = dv_middle_z
     orow = np.zeros((3, 3), np.int64)
-    orow[:, I.OR_EFF] = -1, 1, 2
-    orow[0, I.OR_FLAGS] = np.int64(1) << 2  # segment 1 taut, segment 0 slack
-    return node_pos, node_vel, seg_i, seg_f, mat_f, node_acc, orow
+    orow[:, T.OR_EFF] = -1, 1, 2
+    orow[0, T.OR_FLAGS] = np.int64(1) << 2  # segment 1 taut, segment 0 slack
+    model = _record(ModelRecord, mat_f=mat_f)
+    state = _record(StateRecord, node_pos=node_pos, node_vel=node_vel, seg_i=seg_i, seg_f=seg_f, node_acc=node_acc)
+    return model, state, orow
+
+
+def _record(cls, **arrays):
+    """A record of class ``cls`` holding ``arrays``, its other fields empty arrays of their dtype and rank."""
+    return cls(*(arrays.get(f.name, np.zeros((0,) * f.ndim, f.dtype)) for f in cls.FIELDS))
 
 
 def test_active_set_segments_enter_before_any_leaves():
     """A solve that predicts one slack segment taut and another taut one compressed flips only the entering one;
     the leaving one goes on the next pass if it is still predicted compressed. Reference: the rule of
-    ``_update_active_set`` (a wrong exit, frozen for the step, blew up a hanging loop at a 0.5 s step)."""
+    ``update_active_set`` (a wrong exit, frozen for the step, blew up a hanging loop at a 0.5 s step)."""
     # the middle node moves down 0.1 m/s over 0.1 s: upper segment +1 cm (taut), lower -1 cm (compressed)
-    args = _two_segment_column(-0.1)
-    orow = args[-1]
+    model, state, orow = _two_segment_column(-0.1)
     h = 0.1
-    assert I._update_active_set(h, *args) == 1
-    assert I._is_active(orow, 0) == 1 and I._is_active(orow, 1) == 1
-    assert I._update_active_set(h, *args) == 1  # no entry left: the exit is taken
-    assert I._is_active(orow, 1) == 0
-    assert I._update_active_set(h, *args) == 0  # both changed once: frozen for the rest of the step
+    assert S.update_active_set(h, model, state, orow) == 1
+    assert S.is_active(orow, 0) == 1 and S.is_active(orow, 1) == 1
+    assert S.update_active_set(h, model, state, orow) == 1  # no entry left: the exit is taken
+    assert S.is_active(orow, 1) == 0
+    assert S.update_active_set(h, model, state, orow) == 0  # both changed once: frozen for the rest of the step

@@ -1,0 +1,149 @@
+"""The implicit step's active set: which segments are taut (carry their linearised axial law) during the step.
+
+The set is predicted to the *end* of the step (``physics/implicit.py``): it starts from the segments taut now, and
+after each solve :func:`update_active_set` predicts every segment's strain and tension at the end of the step from
+the solution; a segment is in the set iff both are positive. Each segment may change set once per step.
+
+Storage: two bits per segment in the flag words of the ordering scratch (bits 2 (s & 31) and 2 (s & 31) + 1 of
+word s >> 5 of ``orow[:, OR_FLAGS]``: segment s is taut / has changed set in this step), so the set needs no
+array of its own.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from moor_env.physics._jit import jit_no_refcount, jit_step
+from moor_env.physics.layout import MF_EA, MF_MASS, MF_ZETA, SF_L0, SI_A, SI_ACTIVE, SI_B, SI_MAT
+from moor_env.physics.line import segment_axis
+from moor_env.physics.tree import OR_EFF, OR_FLAGS
+
+SET_TOLERANCE = 1e-6  # strain by which a segment must miss its predicted set before the step is solved again
+
+
+@jit_step
+def is_active(orow, s):
+    """Bit 2s of the flag words: segment s is in the active (taut) set (the words hold 32 segments per node;
+    a segment beyond that, which no compiled model has, is never active and so stays explicit)."""
+    if (s >> 5) >= orow.shape[0]:
+        return 0
+    return (orow[s >> 5, OR_FLAGS] >> (2 * (s & 31))) & 1
+
+
+@jit_step
+def _is_frozen(orow, s):
+    """Bit 2s + 1: segment s has already changed set once in this step."""
+    return (orow[s >> 5, OR_FLAGS] >> (2 * (s & 31) + 1)) & 1
+
+
+@jit_step
+def _flip(orow, s):
+    """Toggle the active bit of segment s and freeze it for the rest of the step."""
+    orow[s >> 5, OR_FLAGS] ^= np.int64(1) << (2 * (s & 31))
+    orow[s >> 5, OR_FLAGS] |= np.int64(1) << (2 * (s & 31) + 1)
+
+
+@jit_step
+def segment_gain(s, h, orow, node_pos, seg_i, seg_f, mat_f, seg_tension):
+    """G_s = h C_s + h^2 K_s = alpha q q^T + beta I of an active segment, with its unit tangent.
+
+    Returns (alpha, beta, qx, qy, qz, kq, kt), with K_s = kq q q^T + kt (I - q q^T) [N/m]; zeros for a
+    segment outside the active set.
+    """
+    if is_active(orow, s) == 0:
+        return 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0
+    a = seg_i[s, SI_A]
+    b = seg_i[s, SI_B]
+    m = seg_i[s, SI_MAT]
+    l0 = seg_f[s, SF_L0]
+    length, qx, qy, qz = segment_axis(node_pos, a, b)
+    ea = mat_f[m, MF_EA]
+    kq = ea / l0
+    cq = mat_f[m, MF_ZETA] * math.sqrt(ea * mat_f[m, MF_MASS])  # BA / l0
+    kt = seg_tension[s] / length
+    alpha = h * cq + h * h * (kq - kt)
+    beta = h * h * kt
+    return alpha, beta, qx, qy, qz, kq, kt
+
+
+@jit_step
+def init_active_set(seg_i, seg_tension, orow):
+    """Initial active set: the coupling segments taut at the start of the step."""
+    nn = orow.shape[0]
+    for w in range(min(nn, ((seg_i.shape[0] - 1) >> 5) + 1)):
+        orow[w, OR_FLAGS] = 0
+    for s in range(seg_i.shape[0]):
+        if seg_i[s, SI_ACTIVE] == 0 or not (seg_tension[s] > 0.0) or (s >> 5) >= nn:
+            continue
+        if orow[seg_i[s, SI_A], OR_EFF] != orow[seg_i[s, SI_B], OR_EFF]:
+            orow[s >> 5, OR_FLAGS] |= np.int64(1) << (2 * (s & 31))
+
+
+@jit_no_refcount
+def update_active_set(h, model, state, orow):
+    """Predict every segment's strain and tension at the end of the step from the solved dv (``state.node_acc``);
+    a segment is active (taut) iff both are positive. Returns the number of segments that changed.
+
+    Entries first: while some slack segment is predicted taut, no taut one leaves the set in the same pass
+    (they are judged again on the next solve, with the entering segments carrying load). A solve that misses a
+    taut segment misplaces the nodes it would have held, and the segments beside them can then look
+    compressed; as a segment changes set at most once per step, letting them leave on that evidence froze a
+    wrong set. Measured: a hanging chain loop at a 0.5 s step dropped five consecutive loop segments from the
+    set while a fibre segment went taut, and the next step stretched them 105 % (blow-up).
+    """
+    entries, exits = _pass_active_set(h, model, state, orow, False)
+    if entries > 0 or exits == 0:
+        return entries
+    return _pass_active_set(h, model, state, orow, True)[1]
+
+
+@jit_no_refcount
+def _pass_active_set(h, model, state, orow, flip_exits):
+    """One pass of :func:`update_active_set`: flip the slack segments predicted taut (and, with ``flip_exits``,
+    the taut ones predicted slack); returns (entries, exits), the exits counted whether flipped or not."""
+    mat_f, node_pos, node_vel = model.mat_f, state.node_pos, state.node_vel
+    seg_i, seg_f, node_acc = state.seg_i, state.seg_f, state.node_acc
+    entries = 0
+    exits = 0
+    nn = orow.shape[0]
+    for s in range(seg_i.shape[0]):
+        if seg_i[s, SI_ACTIVE] == 0 or (s >> 5) >= nn or _is_frozen(orow, s) == 1:
+            continue
+        a = seg_i[s, SI_A]
+        b = seg_i[s, SI_B]
+        ea = orow[a, OR_EFF]
+        eb = orow[b, OR_EFF]
+        if ea == eb:
+            continue
+        m = seg_i[s, SI_MAT]
+        l0 = seg_f[s, SF_L0]
+        length, qx, qy, qz = segment_axis(node_pos, a, b)
+        rate0 = ((node_vel[b, 0] - node_vel[a, 0]) * qx + (node_vel[b, 1] - node_vel[a, 1]) * qy
+                 + (node_vel[b, 2] - node_vel[a, 2]) * qz) / l0
+        ddx = 0.0
+        ddy = 0.0
+        ddz = 0.0
+        if eb >= 0:
+            ddx += node_acc[eb, 0]
+            ddy += node_acc[eb, 1]
+            ddz += node_acc[eb, 2]
+        if ea >= 0:
+            ddx -= node_acc[ea, 0]
+            ddy -= node_acc[ea, 1]
+            ddz -= node_acc[ea, 2]
+        drate = (ddx * qx + ddy * qy + ddz * qz) / l0
+        rate1 = rate0 + drate  # strain rate at the end of the step
+        strain1 = (length - l0) / l0 + h * rate1
+        ea_ = mat_f[m, MF_EA]
+        t1 = ea_ * strain1 + mat_f[m, MF_ZETA] * l0 * math.sqrt(ea_ * mat_f[m, MF_MASS]) * rate1
+        if is_active(orow, s) == 1:
+            if strain1 < -SET_TOLERANCE or t1 < -SET_TOLERANCE * ea_:
+                exits += 1
+                if flip_exits:
+                    _flip(orow, s)
+        elif strain1 > SET_TOLERANCE and t1 > SET_TOLERANCE * ea_:
+            entries += 1
+            _flip(orow, s)
+    return entries, exits

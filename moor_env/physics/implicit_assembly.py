@@ -1,0 +1,207 @@
+"""Assembly of the implicit step's block system (``physics/implicit.py``): the diagonal blocks M + h C + h^2 K of
+every unknown and the right-hand sides h F - h^2 K v, for the step's active set.
+
+Linearised here: the axial spring-damper of every active segment (with its geometric stiffness), the line drag
+per half segment (its exact 3x3 velocity Jacobian, skipped where the drag is far from stiff on the step's scale),
+the point masses' drag, and the seabed contact with its regularised friction. A segment leaving the active set
+contributes the removal of its start-of-step tension.
+"""
+
+from __future__ import annotations
+
+import math
+
+from moor_env.physics._jit import jit_no_refcount
+from moor_env.physics.environment import current_velocity
+from moor_env.physics.hydro import add_slender_added_mass, add_slender_drag_dv
+from moor_env.physics.implicit_active_set import is_active
+from moor_env.physics.layout import (
+    EF_CBOT,
+    EF_DEPTH,
+    EF_FRIC_V,
+    EF_KBOT,
+    EF_MU,
+    EF_RHO,
+    MF_CAN,
+    MF_CAT,
+    MF_CDN,
+    MF_CDT,
+    MF_D,
+    MF_EA,
+    MF_MASS,
+    MF_ZETA,
+    NF_POINT_CA,
+    NF_POINT_CDA,
+    NF_POINT_VOLUME,
+    SF_L0,
+    SI_A,
+    SI_ACTIVE,
+    SI_B,
+    SI_MAT,
+)
+from moor_env.physics.line import segment_axis
+from moor_env.physics.tree import OR_EFF, add_sym
+
+DRAG_SKIP = 0.02  # drag of a half segment is linearised only where h * (its damping rate) exceeds this
+
+
+@jit_no_refcount
+def assemble(h, first, body_node, model, state, orow):
+    """Diagonal blocks (``state.node_mm``) and right-hand sides (``state.node_acc``) for the current active set.
+
+    On the first call node_mm still holds the added mass from the load evaluation; later calls rebuild it.
+    """
+    mat_f, env_f, current_profile = model.mat_f, model.env_f, model.current_profile
+    node_pos, node_vel, node_i = state.node_pos, state.node_vel, state.node_i
+    node_f, seg_i, seg_f = state.node_f, state.seg_i, state.seg_f
+    node_force, node_mm, node_mass = state.node_force, state.node_mm, state.node_mass
+    node_contact, node_acc, seg_tension = state.node_contact, state.node_acc, state.seg_tension
+    nn = node_i.shape[0]
+    rho = env_f[EF_RHO]
+    depth = env_f[EF_DEPTH]
+    for n in range(nn):
+        if orow[n, OR_EFF] != n:
+            continue
+        if n == body_node:
+            for c in range(6):
+                node_mm[n, c] = 0.0
+            for c in range(3):
+                node_acc[n, c] = 0.0
+            continue
+        if not first:
+            for c in range(6):
+                node_mm[n, c] = 0.0
+        node_mm[n, 0] += node_mass[n]
+        node_mm[n, 1] += node_mass[n]
+        node_mm[n, 2] += node_mass[n]
+        for c in range(3):
+            node_acc[n, c] = h * node_force[n, c]
+    # point loads: added mass, point-mass drag, seabed contact and friction
+    kbot = env_f[EF_KBOT]
+    cbot = env_f[EF_CBOT]
+    mu = env_f[EF_MU]
+    fric_v = env_f[EF_FRIC_V]
+    for n in range(nn):
+        e = orow[n, OR_EFF]
+        if e < 0 or e == body_node:
+            continue
+        if not first:
+            ma = rho * node_f[n, NF_POINT_VOLUME] * node_f[n, NF_POINT_CA]
+            node_mm[e, 0] += ma
+            node_mm[e, 1] += ma
+            node_mm[e, 2] += ma
+        cda = node_f[n, NF_POINT_CDA]
+        if cda > 0.0:
+            ux, uy, uz = current_velocity(node_pos[n, 2], env_f, current_profile)
+            rx = ux - node_vel[n, 0]
+            ry = uy - node_vel[n, 1]
+            rz = uz - node_vel[n, 2]
+            vr = math.sqrt(rx * rx + ry * ry + rz * rz)
+            if vr > 0.0:
+                k = h * 0.5 * rho * cda
+                kv = k / vr
+                add_sym(node_mm, e, k * vr + kv * rx * rx, k * vr + kv * ry * ry, k * vr + kv * rz * rz,
+                         kv * rx * ry, kv * rx * rz, kv * ry * rz)
+        area = node_contact[n]
+        penetration = -depth - node_pos[n, 2]
+        if penetration > 0.0 and area > 0.0:
+            vx = node_vel[n, 0]
+            vy = node_vel[n, 1]
+            vz = node_vel[n, 2]
+            fz = (kbot * penetration - cbot * vz) * area
+            if fz > 0.0:
+                node_mm[e, 2] += h * cbot * area + h * h * kbot * area
+                node_acc[e, 2] -= h * h * kbot * area * vz
+                vh = math.sqrt(vx * vx + vy * vy)
+                if vh < fric_v:
+                    cf = h * mu * fz / fric_v
+                    node_mm[e, 0] += cf
+                    node_mm[e, 1] += cf
+                else:
+                    cf = h * mu * fz / vh
+                    ex = vx / vh
+                    ey = vy / vh
+                    node_mm[e, 0] += cf * (1.0 - ex * ex)
+                    node_mm[e, 1] += cf * (1.0 - ey * ey)
+                    node_mm[e, 3] -= cf * ex * ey
+    # segments: added mass (rebuild), drag Jacobians, axial spring-damper of the active set
+    for s in range(seg_i.shape[0]):
+        if seg_i[s, SI_ACTIVE] == 0:
+            continue
+        a = seg_i[s, SI_A]
+        b = seg_i[s, SI_B]
+        ea = orow[a, OR_EFF]
+        eb = orow[b, OR_EFF]
+        if ea < 0 and eb < 0:
+            continue
+        m = seg_i[s, SI_MAT]
+        l0 = seg_f[s, SF_L0]
+        half = 0.5 * l0
+        d = mat_f[m, MF_D]
+        cn = 0.5 * rho * mat_f[m, MF_CDN] * d * half
+        ct = 0.5 * rho * mat_f[m, MF_CDT] * math.pi * d * half
+        length, qx, qy, qz = segment_axis(node_pos, a, b)
+        volume = 0.25 * math.pi * d * d * half
+        for end in range(2):
+            n = a if end == 0 else b
+            e = ea if end == 0 else eb
+            if e < 0 or e == body_node:
+                continue
+            if not first:
+                add_slender_added_mass(node_mm, e, qx, qy, qz, rho * volume * mat_f[m, MF_CAN],
+                                       rho * volume * mat_f[m, MF_CAT])
+            if cn > 0.0 or ct > 0.0:
+                ux, uy, uz = current_velocity(node_pos[n, 2], env_f, current_profile)
+                rx = ux - node_vel[n, 0]
+                ry = uy - node_vel[n, 1]
+                rz = uz - node_vel[n, 2]
+                # linearise only where the drag is stiff on this step's scale (h * rate > DRAG_SKIP)
+                c = h * (cn + 2.0 * ct)
+                if c * c * (rx * rx + ry * ry + rz * rz) > (DRAG_SKIP * node_mass[e]) ** 2:
+                    add_slender_drag_dv(node_mm, e, h, rx, ry, rz, qx, qy, qz, cn, ct)
+        if ea == eb:
+            continue
+        tension = seg_tension[s]
+        rx = node_vel[b, 0] - node_vel[a, 0]
+        ry = node_vel[b, 1] - node_vel[a, 1]
+        rz = node_vel[b, 2] - node_vel[a, 2]
+        rq = rx * qx + ry * qy + rz * qz
+        if is_active(orow, s) == 0:
+            if tension == 0.0:
+                continue
+            # leaves the active set during the step: no tension at its end
+            fx = -h * tension * qx
+            fy = -h * tension * qy
+            fz = -h * tension * qz
+        else:
+            ea_ = mat_f[m, MF_EA]
+            cq = mat_f[m, MF_ZETA] * math.sqrt(ea_ * mat_f[m, MF_MASS])
+            kq = ea_ / l0
+            kt = tension / length
+            # unclipped tension of the linear law minus the (clipped) tension already in the loads
+            t_lin = ea_ * (length - l0) / l0 + cq * rq
+            alpha = h * cq + h * h * (kq - kt)
+            beta = h * h * kt
+            w = h * (t_lin - tension) + h * h * (kq - kt) * rq
+            # h (t_lin - T) q + h^2 K_s (v_b - v_a), acting on node a (minus on b)
+            fx = w * qx + h * h * kt * rx
+            fy = w * qy + h * h * kt * ry
+            fz = w * qz + h * h * kt * rz
+            gxx = alpha * qx * qx + beta
+            gyy = alpha * qy * qy + beta
+            gzz = alpha * qz * qz + beta
+            gxy = alpha * qx * qy
+            gxz = alpha * qx * qz
+            gyz = alpha * qy * qz
+            if ea >= 0:
+                add_sym(node_mm, ea, gxx, gyy, gzz, gxy, gxz, gyz)
+            if eb >= 0:
+                add_sym(node_mm, eb, gxx, gyy, gzz, gxy, gxz, gyz)
+        if ea >= 0:
+            node_acc[ea, 0] += fx
+            node_acc[ea, 1] += fy
+            node_acc[ea, 2] += fz
+        if eb >= 0:
+            node_acc[eb, 0] -= fx
+            node_acc[eb, 1] -= fy
+            node_acc[eb, 2] -= fz
