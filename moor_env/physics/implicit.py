@@ -108,9 +108,9 @@ def prepare(reuse_order, body_node, state, tree, orow):
     seg_i = state.seg_i
     if not reuse_order:
         build_tree(body_node, node_i, seg_i, tree, orow)
-        init_active_set(seg_i, state.seg_tension, orow)
+        init_active_set(seg_i, state.seg_tension, state.seg_chord, orow)
         return order(body_node, node_i, seg_i, tree, orow)
-    init_active_set(seg_i, state.seg_tension, orow)
+    init_active_set(seg_i, state.seg_tension, state.seg_chord, orow)
     return count_unknowns(body_node, orow)
 
 
@@ -118,6 +118,7 @@ def prepare(reuse_order, body_node, state, tree, orow):
 def eliminate(h, nq, model, state, tree, orow):
     """Forward elimination, leaves first: node_mm <- D^-1, node_acc <- y = D^-1 r; Schur terms into parents."""
     node_pos, seg_i, seg_f, seg_tension = state.node_pos, state.seg_i, state.seg_f, state.seg_tension
+    seg_chord = state.seg_chord
     node_mm, node_acc, mat_f = state.node_mm, state.node_acc, model.mat_f
     for k in range(nq):
         c = orow[k, OR_ORDER]
@@ -125,7 +126,7 @@ def eliminate(h, nq, model, state, tree, orow):
         if tree[c, TR_DEG] != -1:
             continue
         alpha, beta, qx, qy, qz, kq, kt = segment_gain(tree[c, TR_SEG], h, orow, node_pos, seg_i, seg_f, mat_f,
-                                                       seg_tension)
+                                                       seg_tension, seg_chord)
         if alpha == 0.0 and beta == 0.0:
             continue
         schur_into_parent(node_mm, node_acc, c, tree[c, TR_NB], alpha, beta, qx, qy, qz)
@@ -135,13 +136,14 @@ def eliminate(h, nq, model, state, tree, orow):
 def back_substitute(h, nq, model, state, tree, orow):
     """Root first: dv_c = y_c + D_c^-1 G dv_parent (node_acc <- dv)."""
     node_pos, seg_i, seg_f, seg_tension = state.node_pos, state.seg_i, state.seg_f, state.seg_tension
+    seg_chord = state.seg_chord
     node_mm, node_acc, mat_f = state.node_mm, state.node_acc, model.mat_f
     for k in range(nq - 1, -1, -1):
         c = orow[k, OR_ORDER]
         if tree[c, TR_DEG] != -1:
             continue
         alpha, beta, qx, qy, qz, kq, kt = segment_gain(tree[c, TR_SEG], h, orow, node_pos, seg_i, seg_f, mat_f,
-                                                       seg_tension)
+                                                       seg_tension, seg_chord)
         if alpha == 0.0 and beta == 0.0:
             continue
         back_from_parent(node_mm, node_acc, c, tree[c, TR_NB], alpha, beta, qx, qy, qz)

@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import math
 
-from moor_env.physics._jit import jit_no_refcount
+from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.environment import current_velocity
 from moor_env.physics.hydro import add_slender_added_mass, add_slender_drag_dv
-from moor_env.physics.implicit_active_set import is_active
+from moor_env.physics.implicit_active_set import chord_point, is_active
 from moor_env.physics.layout import (
     EF_CBOT,
     EF_DEPTH,
@@ -56,6 +56,7 @@ def assemble(h, first, body_node, model, state, orow):
     node_f, seg_i, seg_f = state.node_f, state.seg_i, state.seg_f
     node_force, node_mm, node_mass = state.node_force, state.node_mm, state.node_mass
     node_contact, node_acc, seg_tension = state.node_contact, state.node_acc, state.seg_tension
+    seg_chord = state.seg_chord
     nn = node_i.shape[0]
     rho = env_f[EF_RHO]
     depth = env_f[EF_DEPTH]
@@ -173,6 +174,11 @@ def assemble(h, first, body_node, model, state, orow):
             fx = -h * tension * qx
             fy = -h * tension * qy
             fz = -h * tension * qz
+        elif seg_chord[s, 3] != 0.0:
+            fx, fy, fz = _add_chord_spring(s, h, tension, qx, qy, qz, rx, ry, rz, node_pos, a, b, ea, eb, l0,
+                                           mat_f[m, MF_EA], mat_f[m, MF_ZETA] * math.sqrt(mat_f[m, MF_EA]
+                                                                                          * mat_f[m, MF_MASS]),
+                                           seg_chord, node_mm)
         else:
             ea_ = mat_f[m, MF_EA]
             cq = mat_f[m, MF_ZETA] * math.sqrt(ea_ * mat_f[m, MF_MASS])
@@ -205,3 +211,40 @@ def assemble(h, first, body_node, model, state, orow):
             node_acc[eb, 0] -= fx
             node_acc[eb, 1] -= fy
             node_acc[eb, 2] -= fz
+
+
+@jit_step
+def _add_chord_spring(s, h, tension, q0x, q0y, q0z, rx, ry, rz, node_pos, a, b, ea, eb, l0, ea_, cq, seg_chord,
+                      node_mm):
+    """The axial spring-damper of active segment s linearised at its predicted end chord p (``seg_chord``): adds
+    its block h C + h^2 K at p to both ends' blocks and returns its right-hand side on node a (minus on b).
+
+    With d1 = d0 + h (v_b - v_a + dv_b - dv_a) the end chord, the spring's force on a is linearised about p as
+    f(p) + K(p) (d1 - p), K(p) = EA/l0 q q^T + T_e/|p| (I - q q^T) (q = p / |p|, T_e = EA (|p| / l0 - 1)), and
+    its damping as BA/l0 q q^T (v_b - v_a + dv_b - dv_a); the loads already hold the start tension T along the
+    start tangent q0, so the right-hand side is h (f(p) + BA/l0 (r . q) q - T q0) - h K(p) (p - d0 - h r), r the
+    relative velocity at the start.
+    """
+    kq = ea_ / l0
+    length, qx, qy, qz, kt = chord_point(s, seg_chord, kq, l0)
+    t_lin = kq * (length - l0) + cq * (rx * qx + ry * qy + rz * qz)
+    ex = seg_chord[s, 0] - (node_pos[b, 0] - node_pos[a, 0]) - h * rx
+    ey = seg_chord[s, 1] - (node_pos[b, 1] - node_pos[a, 1]) - h * ry
+    ez = seg_chord[s, 2] - (node_pos[b, 2] - node_pos[a, 2]) - h * rz
+    w = h * (kq - kt) * (ex * qx + ey * qy + ez * qz)
+    fx = h * (t_lin * qx - tension * q0x) - w * qx - h * kt * ex
+    fy = h * (t_lin * qy - tension * q0y) - w * qy - h * kt * ey
+    fz = h * (t_lin * qz - tension * q0z) - w * qz - h * kt * ez
+    alpha = h * cq + h * h * (kq - kt)
+    beta = h * h * kt
+    gxx = alpha * qx * qx + beta
+    gyy = alpha * qy * qy + beta
+    gzz = alpha * qz * qz + beta
+    gxy = alpha * qx * qy
+    gxz = alpha * qx * qz
+    gyz = alpha * qy * qz
+    if ea >= 0:
+        add_sym(node_mm, ea, gxx, gyy, gzz, gxy, gxz, gyz)
+    if eb >= 0:
+        add_sym(node_mm, eb, gxx, gyy, gzz, gxy, gxz, gyz)
+    return fx, fy, fz

@@ -78,6 +78,7 @@ WORK_FIELDS: tuple[Field, ...] = (
     Field("node_contact", F8, 1, ("nodes",)),  # seabed contact area [m^2]
     Field("node_acc", F8, 2, ("nodes", 3)),  # acceleration [m/s^2]; implicit step's right-hand sides
     Field("seg_tension", F8, 1, ("segs",)),  # [N]
+    Field("seg_chord", F8, 2, ("segs", 4)),  # implicit step: predicted end chord [m] of a re-linearised segment, flag
     Field("body_load", F8, 1, (6,)),  # force and moment on the anchor
     Field("body_acc", F8, 1, (6,)),  # its linear and angular acceleration
     Field("pos0", F8, 2, ("nodes", 3)),  # step-start positions (RK2); implicit step's tree (int64 view)

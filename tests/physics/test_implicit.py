@@ -135,7 +135,7 @@ def test_tree_solver_matches_a_dense_solve():
         a, b = eff[st.seg_i[s, L.SI_A]], eff[st.seg_i[s, L.SI_B]]
         if a >= 0 and b >= 0 and a != b:
             alpha, beta, qx, qy, qz, _, _ = S.segment_gain(s, h, orow, st.node_pos, st.seg_i, st.seg_f, m.mat_f,
-                                                           w.seg_tension)
+                                                           w.seg_tension, w.seg_chord)
             q = np.array([qx, qy, qz])
             edges.append((a, b, alpha * np.outer(q, q) + beta * np.eye(3)))
     I.eliminate(h, nq, model, state, tree, orow)
@@ -295,7 +295,8 @@ def _two_segment_column(dv_middle_z: float) -> tuple:
     orow[:, T.OR_EFF] = -1, 1, 2
     orow[0, T.OR_FLAGS] = np.int64(1) << 2  # segment 1 taut, segment 0 slack
     model = _record(ModelRecord, mat_f=mat_f)
-    state = _record(StateRecord, node_pos=node_pos, node_vel=node_vel, seg_i=seg_i, seg_f=seg_f, node_acc=node_acc)
+    state = _record(StateRecord, node_pos=node_pos, node_vel=node_vel, seg_i=seg_i, seg_f=seg_f, node_acc=node_acc,
+                    seg_chord=np.zeros((2, 4)))
     return model, state, orow
 
 
