@@ -16,6 +16,7 @@ import numpy as np
 
 from moor_env.anchor_properties import anchor_properties, body_arrays
 from moor_env.config import SceneConfig
+from moor_env.contact_model import contact_arrays
 from moor_env.errors import ConfigError
 from moor_env.line_mesh import MeshBuilder, hanging_curve
 from moor_env.physics import layout as L
@@ -59,6 +60,8 @@ class Model:
     body_q: np.ndarray
     env_f: np.ndarray
     current_profile: np.ndarray
+    contact_f: np.ndarray
+    contact_shape: np.ndarray
     node_pos0: np.ndarray
     body_state0: np.ndarray
     material_names: tuple[str, ...]
@@ -138,8 +141,10 @@ def compile_scene(scene: SceneConfig) -> Model:
     return model
 
 
-def _finish(scene: SceneConfig, b: MeshBuilder, body_f, body_q, body_state0, line_names, vessel_base, **extra) -> Model:
+def _finish(scene: SceneConfig, b: MeshBuilder, body_f, body_q, body_state0, line_names, vessel_base, props=None,
+            **extra) -> Model:
     mat_f, mat_names = _material_arrays(scene)
+    contact_f, contact_shape = contact_arrays(scene, props)
     env_f, profile = _env_arrays(scene)
     nn = len(b.node_kind)
     node_i = np.zeros((nn, L.N_NODE_I), dtype=np.int64)
@@ -170,7 +175,8 @@ def _finish(scene: SceneConfig, b: MeshBuilder, body_f, body_q, body_state0, lin
         lines[name] = LineInfo(name=name, index=li, materials=tuple(mats), material_lengths_m=tuple(lens))
     return Model(scene=scene, node_i=node_i, node_f=node_f, seg_i=seg_i, seg_f=seg_f, mat_f=mat_f, line_i=line_i,
                  line_f=line_f, body_f=body_f, body_q=body_q, env_f=env_f, current_profile=profile,
-                 node_pos0=node_pos, body_state0=body_state0, material_names=mat_names, lines=lines,
+                 contact_f=contact_f, contact_shape=contact_shape, node_pos0=node_pos, body_state0=body_state0,
+                 material_names=mat_names, lines=lines,
                  vessel_base_m=np.asarray(vessel_base, float).reshape(-1, 3), **extra)
 
 
@@ -239,7 +245,7 @@ def _compile_installation(scene: SceneConfig) -> Model:
     body_state0 = np.zeros(L.N_BODY_STATE)
     body_state0[L.BS_POS + 2] = z_tip + props.s_tip_m
     body_state0[L.BS_AXIS + 2] = -1.0
-    model = _finish(scene, b, body_f, props.quadrature, body_state0, line_names, vessel_base,
+    model = _finish(scene, b, body_f, props.quadrature, body_state0, line_names, vessel_base, props=props,
                     release_node=release_node, wire_end_node=wire_end, body_active=True,
                     anchor_mass_kg=props.mass_kg, anchor_submerged_mass_kg=props.submerged_mass_kg)
     model.extras["anchor"] = props

@@ -132,6 +132,10 @@ class DropResult:
     release_time_s: float
     chain_on_seabed_m: float
     chain_past_back_end_m: float | None  # Simulator.line_past_back_end_m of the vertical chain, at the end
+    line_anchor_contact: bool  # whether the lines' contact with the anchor was modelled (contact_model)
+    contact_peak_force_n: float | None  # the contact's largest net force on the anchor during the fall
+    contact_peak_depth_m: float | None  # the deepest a node went inside the anchor's surface during the fall
+    chain_on_anchor_m: float | None  # Simulator.line_on_anchor_m of the vertical chain, at the end
     max_tension_n: dict[str, float]
     n_nodes: int
     n_steps: int
@@ -223,6 +227,9 @@ def run_drop(sim: Simulator, wall_static_s: float = 0.0, keep_snapshots: bool = 
     max_tension = {name: float(sim.state.line_f[info.index, L.LF_MAX_TENSION])
                    for name, info in sim.model.lines.items()}
     chain = {sc.installation.chain_material} if inst is not None else None
+    vertical = sim.model.body_active and "vertical_chain" in sim.model.lines
+    contact_on = bool(sim.model.contact_f[L.CF_ON])
+    contact = sim.contact_report()
     result = DropResult(
         status="touchdown" if touched else "no touchdown within max_fall_time_s",
         touchdown_time_s=float(td[L.TD_TIME] - sim.release_time_s) if touched else None,
@@ -233,8 +240,11 @@ def run_drop(sim: Simulator, wall_static_s: float = 0.0, keep_snapshots: bool = 
         release_point_m=None if sim.release_point_m is None else [float(v) for v in sim.release_point_m],
         release_time_s=float(sim.release_time_s),
         chain_on_seabed_m=sim.line_length_on_seabed_m(chain),
-        chain_past_back_end_m=sim.line_past_back_end_m("vertical_chain")[0]
-        if sim.model.body_active and "vertical_chain" in sim.model.lines else None,
+        chain_past_back_end_m=sim.line_past_back_end_m("vertical_chain")[0] if vertical else None,
+        line_anchor_contact=contact_on,
+        contact_peak_force_n=contact["peak_force_n"] if contact_on else None,
+        contact_peak_depth_m=contact["peak_depth_m"] if contact_on else None,
+        chain_on_anchor_m=sim.line_on_anchor_m("vertical_chain") if vertical else None,
         max_tension_n=max_tension,
         n_nodes=int(np.sum(sim.state.node_i[:, L.NI_KIND] != L.NODE_INACTIVE)),
         n_steps=n_steps, dt_s=sim.dt, wall_static_s=wall_static_s, wall_dynamic_s=wall,

@@ -15,6 +15,7 @@ from moor_env.config import SceneConfig
 from moor_env.errors import SimulationDiverged
 from moor_env.physics import layout as L
 from moor_env.physics.anchor import tilt_deg
+from moor_env.physics.anchor_surface import length_on_surface
 from moor_env.physics.integrate import (
     FAIL_BODY,
     FAIL_NODE,
@@ -229,6 +230,7 @@ class Simulator:
                 _deactivate_line(st, wire)
         st.released = True
         self.release_time_s = st.t
+        self.work.contact_out[:] = 0.0  # the contact's peaks count from the release
 
     # --- outputs -------------------------------------------------------------------------------------------
     def tip_state(self) -> tuple[np.ndarray, np.ndarray]:
@@ -268,6 +270,21 @@ class Simulator:
         along = rel @ axis
         k = int(np.argmax(along))
         return float(along[k]), float(np.linalg.norm(rel[k] - along[k] * axis))
+
+    def line_on_anchor_m(self, line: str, tolerance_m: float = 0.05) -> float:
+        """Unstretched length of ``line`` resting on the anchor: its segments with both ends within ``tolerance_m``
+        of the anchor's surface or inside it [m] (:func:`moor_env.physics.anchor_surface.length_on_surface`)."""
+        st = self.state
+        idx = self.model.lines[line].index
+        return float(length_on_surface(st.node_pos, st.seg_i, st.seg_f, st.line_i[idx, L.LI_SEG_START],
+                                       st.line_i[idx, L.LI_NSEG], st.body_state, self.model.contact_shape,
+                                       tolerance_m))
+
+    def contact_report(self) -> dict[str, float]:
+        """What the line-anchor contact did since the release: its peak net force on the anchor [N] and the deepest
+        a node went inside the anchor's surface [m] (zeros where the contact is off)."""
+        out = self.work.contact_out
+        return {"peak_force_n": float(out[L.CO_PEAK_FORCE]), "peak_depth_m": float(out[L.CO_PEAK_DEPTH])}
 
     def top_tensions_n(self) -> dict[str, float]:
         """Load of each line on its vessel (top-segment tension plus the top half-segment's weight and drag),

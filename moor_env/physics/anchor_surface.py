@@ -170,14 +170,15 @@ def surface_distance(px, py, pz, body_state, shape):
 
 
 @jit
-def within_reach(px, py, pz, body_state, shape):
-    """Whether a point lies inside the cylinder that bounds the anchor (cheap test before the contact law)."""
+def within_reach(px, py, pz, body_state, shape, margin_m=0.0):
+    """Whether a point lies inside the cylinder that bounds the anchor, grown by ``margin_m`` [m] on every side
+    (cheap test before the contact law)."""
     rx, ry, rz, a = from_cog(px, py, pz, body_state)
-    if a > shape[0, CS_FRONT] or a < shape[shape.shape[0] - 1, CS_BACK]:
+    if a > shape[0, CS_FRONT] + margin_m or a < shape[shape.shape[0] - 1, CS_BACK] - margin_m:
         return False
     rho2 = rx * rx + ry * ry + rz * rz - a * a
     for i in range(shape.shape[0]):
-        if rho2 <= shape[i, CS_RADIUS] ** 2:
+        if rho2 <= (shape[i, CS_RADIUS] + margin_m) ** 2:
             return True
     return False
 

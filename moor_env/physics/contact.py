@@ -30,7 +30,7 @@ point whose velocity enters w, so the contact's power is -F . w: the spring stor
   the normal damping c, so the friction is no stiffer for the explicit step than the normal law (under an impact
   N is large and the stick zone widens to mu N / c).
 
-Jacobians (:func:`node_contact` with a ``jac`` array): dF/dx and dF/dv, exact (including the turning of the
+Jacobians (:func:`node_contact`): dF/dx and dF/dv, exact (including the turning of the
 normal, the body's rotation and the friction's dependence on the normal force; checked against central
 differences), for the implicit step (which takes their symmetric part) and the static solver. The body's state
 is held fixed: the anchor is explicit in the implicit step.
@@ -41,8 +41,6 @@ The numbers (stiffness, restitution, friction) and the shape are chosen in ``phy
 from __future__ import annotations
 
 import math
-
-import numpy as np
 
 from moor_env.physics._jit import jit
 from moor_env.physics.anchor_surface import from_cog, surface_distance, within_reach
@@ -77,41 +75,19 @@ def relative_velocity(px, py, pz, vx, vy, vz, body_state):
 
 
 @jit
-def node_contact(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f, jac):
-    """Contact force on a node of mass ``mass_kg`` at (p, v) from the anchor (module docstring).
-
-    ``jac``: an array of shape (2, 3, 3) receives dF/dx [N/m] and dF/dv [N s/m] (zeros out of contact); pass an
-    array of shape (0, 3, 3) where they are not needed.
-
-    Returns
-    -------
-    depth : float
-        Penetration [m] (0 outside).
-    fx, fy, fz : float
-        Force on the node [N]; the body takes the opposite force at the node (:func:`add_contact_reaction`).
-    """
-    want = jac.shape[0] >= 2
-    if want:
-        for i in range(3):
-            for j in range(3):
-                jac[0, i, j] = 0.0
-                jac[1, i, j] = 0.0
-    if not within_reach(px, py, pz, body_state, shape):
-        return 0.0, 0.0, 0.0, 0.0
-    sd, nx, ny, nz, hxx, hyy, hzz, hxy, hxz, hyz, feature = surface_distance(px, py, pz, body_state, shape)
-    if sd >= 0.0:
-        return 0.0, 0.0, 0.0, 0.0
-    depth = -sd
+def _law(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f):
+    """The law of :func:`node_contact`: (depth, force, and what its Jacobian needs); depth 0 outside."""
+    sd = 1.0
+    nx = ny = nz = hxx = hyy = hzz = hxy = hxz = hyz = 0.0
+    if within_reach(px, py, pz, body_state, shape):
+        sd, nx, ny, nz, hxx, hyy, hzz, hxy, hxz, hyz, _ = surface_distance(px, py, pz, body_state, shape)
+    depth = -sd if sd < 0.0 else 0.0
     k = contact_f[CF_STIFFNESS]
     c = 2.0 * contact_f[CF_ZETA] * math.sqrt(k * mass_kg)
     mu = contact_f[CF_MU]
-    # relative velocity to the body point at the node
-    ox = body_state[BS_OMEGA]
-    oy = body_state[BS_OMEGA + 1]
-    oz = body_state[BS_OMEGA + 2]
     wx, wy, wz = relative_velocity(px, py, pz, vx, vy, vz, body_state)
     wn = wx * nx + wy * ny + wz * nz
-    fn = k * depth - c * wn
+    fn = k * depth - c * wn if depth > 0.0 else 0.0
     tx = wx - wn * nx
     ty = wy - wn * ny
     tz = wz - wn * nz
@@ -128,16 +104,40 @@ def node_contact(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f, 
             viscous_from_n = False
         if slope * st > mu * normal:
             sliding = True
-    if sliding:
-        g = mu * normal / st
-    else:
-        g = slope
-    fx = fn * nx - g * tx
-    fy = fn * ny - g * ty
-    fz = fn * nz - g * tz
-    if want:
-        _contact_jacobian(jac, nx, ny, nz, hxx, hyy, hzz, hxy, hxz, hyz, ox, oy, oz, wx, wy, wz, wn, fn, k, c,
-                          mu, contact_f[CF_STICK_SPEED], tx, ty, tz, st, normal, g, sliding, viscous_from_n)
+    g = mu * normal / st if sliding else slope
+    return (depth, fn * nx - g * tx, fn * ny - g * ty, fn * nz - g * tz, nx, ny, nz, hxx, hyy, hzz, hxy, hxz, hyz,
+            wx, wy, wz, wn, fn, k, c, mu, tx, ty, tz, st, normal, g, sliding, viscous_from_n)
+
+
+@jit
+def contact_force(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f):
+    """Contact force on a node of mass ``mass_kg`` at (p, v) from the anchor (module docstring).
+
+    Returns
+    -------
+    depth : float
+        Penetration [m] (0 outside).
+    fx, fy, fz : float
+        Force on the node [N]; the body takes the opposite force at the node (:func:`add_contact_reaction`).
+    """
+    out = _law(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f)
+    return out[0], out[1], out[2], out[3]
+
+
+@jit
+def node_contact(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f, jac):
+    """:func:`contact_force` and its Jacobians: ``jac`` (shape (2, 3, 3)) receives dF/dx [N/m] and dF/dv [N s/m]
+    (zeros out of contact)."""
+    (depth, fx, fy, fz, nx, ny, nz, hxx, hyy, hzz, hxy, hxz, hyz, wx, wy, wz, wn, fn, k, c, mu, tx, ty, tz, st,
+     normal, g, sliding, viscous_from_n) = _law(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f)
+    for i in range(3):
+        for j in range(3):
+            jac[0, i, j] = 0.0
+            jac[1, i, j] = 0.0
+    if depth > 0.0:
+        _contact_jacobian(jac, nx, ny, nz, hxx, hyy, hzz, hxy, hxz, hyz, body_state[BS_OMEGA],
+                          body_state[BS_OMEGA + 1], body_state[BS_OMEGA + 2], wx, wy, wz, wn, fn, k, c, mu,
+                          contact_f[CF_STICK_SPEED], tx, ty, tz, st, normal, g, sliding, viscous_from_n)
     return depth, fx, fy, fz
 
 
@@ -229,15 +229,16 @@ def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_st
     lx = ly = lz = mx = my = mz = 0.0
     count = 0
     deepest = 0.0
-    jac = np.zeros((0, 3, 3))
     for n in range(node_i.shape[0]):
         if node_i[n, NI_KIND] != NODE_FREE:
             continue
         px = node_pos[n, 0]
         py = node_pos[n, 1]
         pz = node_pos[n, 2]
-        depth, fx, fy, fz = node_contact(px, py, pz, node_vel[n, 0], node_vel[n, 1], node_vel[n, 2], node_mass[n],
-                                         body_state, shape, contact_f, jac)
+        if not within_reach(px, py, pz, body_state, shape):
+            continue
+        depth, fx, fy, fz = contact_force(px, py, pz, node_vel[n, 0], node_vel[n, 1], node_vel[n, 2], node_mass[n],
+                                          body_state, shape, contact_f)
         if depth == 0.0:
             continue
         count += 1
@@ -259,3 +260,28 @@ def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_st
     contact_out[CO_DEPTH] = deepest
     contact_out[CO_PEAK_DEPTH] = max(contact_out[CO_PEAK_DEPTH], deepest)
     return lx, ly, lz, mx, my, mz
+
+
+@jit
+def add_contact_stiffness(dmat, orow_eff, body_node, node_pos, body_state, shape, contact_f):
+    """Add the contact's normal stiffness k n n^T to the static solver's diagonal block ``dmat[e]`` of every free
+    node e inside the anchor (``orow_eff[n]``: the unknown that carries node n; itself for a free node).
+
+    The turning of the normal (-f_n H, a negative stiffness across a convex surface) is left out: Newton's blocks
+    stay positive where a step overshoots into the anchor, and the exact residual decides convergence.
+    """
+    k = contact_f[CF_STIFFNESS]
+    for n in range(node_pos.shape[0]):
+        if orow_eff[n] != n or n == body_node:
+            continue
+        px = node_pos[n, 0]
+        py = node_pos[n, 1]
+        pz = node_pos[n, 2]
+        if not within_reach(px, py, pz, body_state, shape):
+            continue
+        sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(px, py, pz, body_state, shape)
+        if sd < 0.0:
+            normal = (nx, ny, nz)
+            for i in range(3):
+                for j in range(3):
+                    dmat[n, i, j] += k * normal[i] * normal[j]

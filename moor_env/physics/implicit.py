@@ -65,9 +65,15 @@ from __future__ import annotations
 import numpy as np
 
 from moor_env.physics._jit import jit_no_refcount, jit_step
-from moor_env.physics.anchor import rotate_axis
+from moor_env.physics.anchor import body_acceleration, rotate_axis
 from moor_env.physics.implicit_active_set import init_active_set, segment_gain, update_active_set
 from moor_env.physics.implicit_assembly import assemble
+from moor_env.physics.implicit_contact import (
+    assemble_contact,
+    contact_reaction,
+    init_contact_set,
+    update_contact_set,
+)
 from moor_env.physics.layout import (
     BF_ACTIVE,
     BF_M11,
@@ -78,6 +84,7 @@ from moor_env.physics.layout import (
     BS_OMEGA,
     BS_POS,
     BS_VEL,
+    CF_ON,
     NF_BODY_S,
     NI_KIND,
     NODE_BODY,
@@ -264,16 +271,27 @@ def implicit_euler_update(model, state, h, reuse_order):
                 body_node = n
                 break
     nq = prepare(reuse_order, body_node, state, tree, orow)
+    contact = body_active and model.contact_f[CF_ON] != 0.0
+    if contact:
+        init_contact_set(model, state)
     c0 = c1 = c2 = c3 = c4 = c5 = 0.0
     for it in range(MAX_ACTIVE_SET_SOLVES):
         assemble(h, it == 0, body_node, model, state, orow)
+        if contact:
+            assemble_contact(h, model, state)
         eliminate(h, nq, model, state, tree, orow)
         if body_node >= 0:
             c0, c1, c2, c3, c4, c5 = couple_body(h, body_node, model, state)
         back_substitute(h, nq, model, state, tree, orow)
-        if update_active_set(h, model, state, orow) == 0:
+        changed = update_active_set(h, model, state, orow)
+        if contact:
+            changed += update_contact_set(h, model, state)
+        if changed == 0:
             break
     body_v2 = 0.0
+    if contact and contact_reaction(h, model, state):
+        # the anchor takes the opposite of the contact impulses the solve gave the nodes
+        body_acceleration(body_state, model.body_f, state.body_load, body_acc)
     if body_active:
         body_acc[0] += c0
         body_acc[1] += c1

@@ -24,10 +24,20 @@ from __future__ import annotations
 
 import math
 
-from moor_env.physics._jit import jit_step
+from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.anchor_surface import surface_distance, within_reach
-from moor_env.physics.contact import relative_velocity
-from moor_env.physics.layout import CF_MU, CF_STICK_SPEED, CF_STIFFNESS, CF_ZETA
+from moor_env.physics.contact import add_contact_reaction, contact_force, relative_velocity
+from moor_env.physics.layout import (
+    CF_MU,
+    CF_STICK_SPEED,
+    CF_STIFFNESS,
+    CF_ZETA,
+    CO_FORCE,
+    CO_PEAK_FORCE,
+    NI_KIND,
+    NODE_FREE,
+)
+from moor_env.physics.tree import add_sym
 
 # contact set of a node during one implicit step
 SET_OUT = 0  # outside, no contact this step
@@ -40,12 +50,10 @@ DEPTH_TOLERANCE_M = 1e-6  # a node must miss its predicted set by this much befo
 @jit_step
 def contact_state(px, py, pz, vx, vy, vz, body_state, shape):
     """Depth d (negative: gap) [m], outward normal, and the velocity w relative to the body point at the node
-    [m/s] of a node within reach of the anchor (``reach`` False, zeros otherwise)."""
-    if not within_reach(px, py, pz, body_state, shape):
-        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    [m/s] of a node (anywhere: the signed distance is defined everywhere)."""
     sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(px, py, pz, body_state, shape)
     wx, wy, wz = relative_velocity(px, py, pz, vx, vy, vz, body_state)
-    return True, -sd, nx, ny, nz, wx, wy, wz
+    return -sd, nx, ny, nz, wx, wy, wz
 
 
 @jit_step
@@ -144,3 +152,117 @@ def contact_force_change(h, mode, depth, nx, ny, nz, wx, wy, wz, mass_kg, contac
         fy -= g * dty - gs * ty * dvt
         fz -= g * dtz - gs * tz * dvt
     return fx, fy, fz
+
+
+@jit_no_refcount
+def init_contact_set(model, state):
+    """Start of a step: every free node within reach and inside the anchor is in the contact set."""
+    contact_set = state.contact_set
+    node_i = state.node_i
+    p = state.node_pos
+    for n in range(node_i.shape[0]):
+        contact_set[n] = SET_OUT
+        if node_i[n, NI_KIND] != NODE_FREE:
+            continue
+        if not within_reach(p[n, 0], p[n, 1], p[n, 2], state.body_state, model.contact_shape):
+            continue
+        if surface_distance(p[n, 0], p[n, 1], p[n, 2], state.body_state, model.contact_shape)[0] < 0.0:
+            contact_set[n] = SET_IN
+
+
+@jit_no_refcount
+def assemble_contact(h, model, state):
+    """Add every node's contact terms (:func:`contact_terms`) to its block (``node_mm``) and right-hand side
+    (``node_acc``), after the lines' assembly."""
+    contact_set = state.contact_set
+    p = state.node_pos
+    v = state.node_vel
+    node_mm = state.node_mm
+    node_acc = state.node_acc
+    for n in range(contact_set.shape[0]):
+        mode = contact_set[n]
+        if mode == SET_OUT:
+            continue
+        depth, nx, ny, nz, wx, wy, wz = contact_state(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2],
+                                                         state.body_state, model.contact_shape)
+        f0x = f0y = f0z = 0.0
+        if mode == SET_LEFT:
+            _, f0x, f0y, f0z = contact_force(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2],
+                                             state.node_mass[n], state.body_state, model.contact_shape,
+                                             model.contact_f)
+        bxx, byy, bzz, bxy, bxz, byz, rx, ry, rz = contact_terms(h, mode, depth, nx, ny, nz, wx, wy, wz,
+                                                                 state.node_mass[n], model.contact_f, f0x, f0y,
+                                                                 f0z)
+        add_sym(node_mm, n, bxx, byy, bzz, bxy, bxz, byz)
+        node_acc[n, 0] += rx
+        node_acc[n, 1] += ry
+        node_acc[n, 2] += rz
+
+
+@jit_no_refcount
+def update_contact_set(h, model, state):
+    """After a solve (``node_acc`` = dv): nodes outside predicted inside at the end of the step enter the set,
+    nodes inside predicted outside leave it, each once per step. Returns how many changed."""
+    contact_set = state.contact_set
+    node_i = state.node_i
+    p = state.node_pos
+    v = state.node_vel
+    dv = state.node_acc
+    changed = 0
+    for n in range(node_i.shape[0]):
+        mode = contact_set[n]
+        if node_i[n, NI_KIND] != NODE_FREE or mode == SET_ENTERED or mode == SET_LEFT:
+            continue
+        wx, wy, wz = relative_velocity(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2], state.body_state)
+        # reach: how far the node can move against the anchor in the step
+        reach = h * (math.sqrt(wx * wx + wy * wy + wz * wz)
+                     + math.sqrt(dv[n, 0] * dv[n, 0] + dv[n, 1] * dv[n, 1] + dv[n, 2] * dv[n, 2]))
+        if not within_reach(p[n, 0], p[n, 1], p[n, 2], state.body_state, model.contact_shape, reach):
+            continue
+        depth, nx, ny, nz, wx, wy, wz = contact_state(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2],
+                                                      state.body_state, model.contact_shape)
+        end = predicted_depth(h, depth, nx, ny, nz, wx, wy, wz, dv[n, 0], dv[n, 1], dv[n, 2])
+        if mode == SET_OUT and end > DEPTH_TOLERANCE_M:
+            contact_set[n] = SET_ENTERED
+            changed += 1
+        elif mode == SET_IN and end < -DEPTH_TOLERANCE_M:
+            contact_set[n] = SET_LEFT
+            changed += 1
+    return changed
+
+
+@jit_no_refcount
+def contact_reaction(h, model, state):
+    """Add to the anchor's load (``body_load``) the opposite of each node's contact force as the solve applied
+    it beyond its start-of-step force (:func:`contact_force_change`), and record the step's net contact force
+    (``contact_out``); returns whether any node was in contact."""
+    contact_set = state.contact_set
+    p = state.node_pos
+    v = state.node_vel
+    dv = state.node_acc
+    load = state.body_load
+    any_contact = False
+    tx = ty = tz = 0.0
+    for n in range(contact_set.shape[0]):
+        mode = contact_set[n]
+        if mode == SET_OUT:
+            continue
+        any_contact = True
+        depth, nx, ny, nz, wx, wy, wz = contact_state(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2],
+                                                      state.body_state, model.contact_shape)
+        f0x = f0y = f0z = 0.0
+        if mode == SET_IN or mode == SET_LEFT:
+            _, f0x, f0y, f0z = contact_force(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2],
+                                             state.node_mass[n], state.body_state, model.contact_shape,
+                                             model.contact_f)
+        fx, fy, fz = contact_force_change(h, mode, depth, nx, ny, nz, wx, wy, wz, state.node_mass[n],
+                                          model.contact_f, dv[n, 0], dv[n, 1], dv[n, 2], f0x, f0y, f0z)
+        add_contact_reaction(load, state.body_state, p[n, 0], p[n, 1], p[n, 2], fx, fy, fz)
+        tx += f0x + fx
+        ty += f0y + fy
+        tz += f0z + fz
+    force = math.sqrt(tx * tx + ty * ty + tz * tz)
+    out = state.contact_out
+    out[CO_FORCE] = force
+    out[CO_PEAK_FORCE] = max(out[CO_PEAK_FORCE], force)
+    return any_contact

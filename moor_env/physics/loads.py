@@ -1,7 +1,8 @@
 """The loads of a state: every force on the line nodes and the anchor, and the nodes the state prescribes.
 
 :func:`compute_loads` calls each force law once (line segments ``line.segment_loads``, point masses, seabed
-``seabed.seabed_force``, the anchor ``anchor.body_loads``) for every integrator and the statics; a new force is a
+``seabed.seabed_force``, the anchor ``anchor.body_loads``, the lines' contact with the anchor
+``contact.add_contact_loads``) for every integrator and the statics; a new force is a
 law in its own module, called here, with its parameters in the model record and any state it carries in the state
 record (``physics/records.py``). :func:`set_constrained_nodes` places the nodes held by a vessel, the anchor or a
 parent node; :func:`compute_accelerations` adds the explicit integrators' solve for the free nodes.
@@ -13,9 +14,11 @@ import math
 
 from moor_env.physics._jit import jit_no_refcount
 from moor_env.physics.anchor import add_point_load, body_acceleration, body_loads, body_point
+from moor_env.physics.contact import add_contact_loads
 from moor_env.physics.environment import current_velocity
 from moor_env.physics.layout import (
     BF_ACTIVE,
+    CF_ON,
     EF_DEPTH,
     EF_G,
     EF_RHO,
@@ -165,6 +168,11 @@ def compute_loads(model, state):
         for c in range(6):
             body_load[c] = 0.0
         body_loads(body_state, body_f, body_q, env_f, current_profile, body_load)
+        if model.contact_f[CF_ON] != 0.0:
+            reaction = add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_state,
+                                         model.contact_shape, model.contact_f, state.contact_out)
+            for c in range(6):
+                body_load[c] += reaction[c]
         for n in range(nn):
             if node_i[n, NI_KIND] == NODE_BODY:
                 add_point_load(body_load, body_state, node_f[n, NF_BODY_S], node_force[n, 0], node_force[n, 1],

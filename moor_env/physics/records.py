@@ -32,7 +32,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from moor_env.physics.layout import N_BODY_STATE, N_HIST, N_TD
+from moor_env.physics.layout import N_BODY_STATE, N_CONTACT_OUT, N_HIST, N_TD
 
 HISTORY_CAPACITY = 20000  # rows of the tip history a simulator records
 
@@ -57,6 +57,8 @@ MODEL_FIELDS: tuple[Field, ...] = (
     Field("env_f", F8, 1),  # water, seabed, current, limits, vessel-track timing (EF_*)
     Field("current_profile", F8, 2),  # (depth [m], speed factor) rows
     Field("tracks", F8, 3),  # sampled vessel motion: (vessel, sample, position and velocity)
+    Field("contact_f", F8, 1),  # line-anchor contact parameters (CF_*; CF_ON: modelled)
+    Field("contact_shape", F8, 2),  # the anchor's surface as coaxial cylinders (CS_*)
 )
 
 STATE_FIELDS: tuple[Field, ...] = (
@@ -88,6 +90,8 @@ WORK_FIELDS: tuple[Field, ...] = (
     Field("hist", F8, 2, (HISTORY_CAPACITY, N_HIST)),  # tip history rows (H_*)
     Field("hist_count", I8, 1, (1,)),  # rows of ``hist`` used
     Field("top_tension", F8, 1, ("lines",)),  # each line's load on its vessel [N]
+    Field("contact_out", F8, 1, (N_CONTACT_OUT,)),  # what the line-anchor contact did (CO_*)
+    Field("contact_set", I8, 1, ("nodes",)),  # implicit step: each node's contact set (implicit_contact.SET_*)
 )
 
 MODEL_NAMES = tuple(f.name for f in MODEL_FIELDS)

@@ -44,6 +44,7 @@ from moor_env.physics import layout as L
 from moor_env.physics import statics_relaxation
 from moor_env.physics._jit import jit_step
 from moor_env.physics.anchor import rotate_axis
+from moor_env.physics.contact import add_contact_stiffness
 from moor_env.physics.environment import current_velocity
 from moor_env.physics.hydro import slender_drag_dq
 from moor_env.physics.integrate import INTEGRATOR_IMPLICIT_EULER, compute_loads, set_constrained_nodes
@@ -280,11 +281,14 @@ def _solve_body(tau, p, basis, res_body, body_state, node_f, node_force, body_f,
 @jit_step
 def _newton_step(tau, nq, body_node, basis, res_body, dq, node_pos, body_state, node_f, seg_i, seg_f, mat_f,
                  body_f, env_f, current_profile, node_force, node_mass, node_contact, node_acc, seg_tension, dmat,
-                 coupling, tree, orow):
+                 coupling, tree, orow, model):
     """Solve (D / tau^2 + K) dx = F into node_acc (free nodes) and dq (anchor) by block elimination over the
     tree, leaves first (x_c = D_c^-1 (r_c - K_cp x_p) once the parent p is known)."""
     _assemble(tau, body_node, node_pos, seg_i, seg_f, mat_f, env_f, current_profile, node_mass, node_contact,
               seg_tension, dmat, coupling, orow)
+    if model.contact_f[L.CF_ON] != 0.0:
+        add_contact_stiffness(dmat, orow[:, OR_EFF], body_node, node_pos, body_state, model.contact_shape,
+                              model.contact_f)
     for n in range(node_pos.shape[0]):
         if orow[n, OR_EFF] == n:
             for c in range(3):
@@ -440,7 +444,7 @@ def newton_statics(ctl, max_iter, body_node, node_pos, node_vel, body_state, bod
         ctl[C_PHASE_IT] += 1.0
         _newton_step(tau, nq, body_node, basis, res_body, dq, node_pos, body_state, node_f, seg_i, seg_f, mat_f,
                      body_f, env_f, current_profile, node_force, node_mass, node_contact, node_acc, seg_tension,
-                     dmat, coupling, tree, orow)
+                     dmat, coupling, tree, orow, model)
         biggest = 0.0
         for n in range(nn):
             if node_i[n, L.NI_KIND] == L.NODE_FREE:

@@ -25,7 +25,6 @@ LENGTH_M = 13.0
 S_BACK_M = S_TIP_M - LENGTH_M
 RADIUS_M = 0.6
 SHAPE = CS.anchor_shape([0.1, 0.2838, 7.6162, 4.9, 0.1], [1.2] * 5, S_TIP_M)
-NO_JAC = np.zeros((0, 3, 3))
 
 
 def body(axis=(0.0, 0.0, -1.0), pos=(0.0, 0.0, 0.0), vel=(0.0, 0.0, 0.0), omega=(0.0, 0.0, 0.0)) -> np.ndarray:
@@ -192,8 +191,8 @@ def test_jacobian_matches_central_differences(case):
             d[j] = h
             args_p = (x + d, v) if which == 0 else (x, v + d)
             args_m = (x - d, v) if which == 0 else (x, v - d)
-            fp = np.array(C.node_contact(*args_p[0], *args_p[1], MASS_KG, state, SHAPE, cf, NO_JAC)[1:])
-            fm = np.array(C.node_contact(*args_m[0], *args_m[1], MASS_KG, state, SHAPE, cf, NO_JAC)[1:])
+            fp = np.array(C.contact_force(*args_p[0], *args_p[1], MASS_KG, state, SHAPE, cf)[1:])
+            fm = np.array(C.contact_force(*args_m[0], *args_m[1], MASS_KG, state, SHAPE, cf)[1:])
             fd[:, j] = (fp - fm) / (2.0 * h)
         scale = np.abs(jac[which]).max()
         assert np.abs(jac[which] - fd).max() <= 1e-6 * scale, (name, which, jac[which], fd)
@@ -223,7 +222,7 @@ def drop(v_in, v_tangential=0.0, restitution=0.0, mu=0.3, g=0.0, mass=MASS_KG, t
     rows = {k_: [] for k_ in ("x", "v", "f", "depth", "energy", "shadow", "body_v")}
     load = np.zeros(6)
     for _ in range(int(round(t_end / DT_S))):
-        depth, fx, fy, fz = C.node_contact(*x, *v, mass, state, SHAPE, cf, NO_JAC)
+        depth, fx, fy, fz = C.contact_force(*x, *v, mass, state, SHAPE, cf)
         f = np.array([fx, fy, fz])
         spring = k * depth * normal if depth > 0.0 else np.zeros(3)
         energy = 0.5 * mass * v @ v - mass * gravity @ x + 0.5 * k * depth * depth
@@ -326,7 +325,7 @@ def test_contact_power_is_never_positive():
         a = rng.uniform(S_BACK_M - 0.01, S_TIP_M + 0.01)
         x = point(state, a, rng.uniform(0.0, RADIUS_M + 0.01), angle=rng.uniform(0, 2 * math.pi))
         v = rng.normal(size=3) * 5.0
-        depth, fx, fy, fz = C.node_contact(*x, *v, MASS_KG, state, SHAPE, cf, NO_JAC)
+        depth, fx, fy, fz = C.contact_force(*x, *v, MASS_KG, state, SHAPE, cf)
         if depth == 0.0:
             continue
         n = np.array(S.surface_distance(*x, state, SHAPE)[1:4])
@@ -368,7 +367,7 @@ def test_friction_sticks_below_the_stick_speed(push_fraction):
     v = np.zeros(3)
     speeds = []
     for _ in range(int(round(1.0 / DT_S))):
-        depth, fx, fy, fz = C.node_contact(*x, *v, MASS_KG, state, SHAPE, cf, NO_JAC)
+        depth, fx, fy, fz = C.contact_force(*x, *v, MASS_KG, state, SHAPE, cf)
         v = v + DT_S * ((np.array([fx, fy, fz]) - weight * normal + push * along) / MASS_KG)
         x = x + DT_S * v
         speeds.append(v @ along)
@@ -385,7 +384,7 @@ def test_reaction_on_the_body():
     state = body(axis=(0.2, 0.0, -1.0), pos=(1.0, 2.0, 3.0))
     x = point(state, S_BACK_M + 0.01, 0.3)
     cf = params()
-    depth, fx, fy, fz = C.node_contact(*x, 0.0, 0.0, -5.0, MASS_KG, state, SHAPE, cf, NO_JAC)
+    depth, fx, fy, fz = C.contact_force(*x, 0.0, 0.0, -5.0, MASS_KG, state, SHAPE, cf)
     assert depth > 0.0
     load = np.zeros(6)
     C.add_contact_reaction(load, state, *x, fx, fy, fz)
