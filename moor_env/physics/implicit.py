@@ -18,11 +18,15 @@ segment snapping taut within a step is an inelastic event. Linearised (implicit)
   outside the set carry no tension (the tension-only law). The set is predicted to the *end* of the step: start
   from the segments taut now, solve, predict every segment's strain and tension at the end of the step from the
   solution (both > 0: taut), and solve again while segments change set (each may change once per step, at most
-  ``MAX_ACTIVE_SET_SOLVES`` solves; typically 1-2; segments enter before any leaves, see
+  ``MAX_ACTIVE_SET_SOLVES`` solves; typically 1-3; segments enter before any leaves, see
   ``implicit_active_set.update_active_set``). A segment entering the set brings its linear law
-  (unclipped, so the solve sees where it goes taut), one leaving it no tension. Without this, a segment going
-  taut inside a step was stretched explicitly and sprang back elastically in the next one, and on a slack
-  chain these snaps ran along it one segment per step and grew until the strain limit;
+  (unclipped, so the solve sees where it goes taut), one leaving it no tension. An active segment that the
+  solve turns so far that its end chord |d0 + h (v1_b - v1_a)| passes the linear prediction by
+  ``TURN_TOLERANCE`` (strain) is linearised again at that chord and the step solved again, one more Newton
+  iteration on its spring: the turn would otherwise stretch it by about (h v_perp)^2 / (2 l0), which the next
+  load evaluation reads as tension (24 MN on a 1 m chain segment turning at 15 m/s over 11.25 ms). Without the
+  end-of-step set, a segment going taut inside a step was stretched explicitly and sprang back elastically in the
+  next one, and on a slack chain these snaps ran along it one segment per step and grew until the strain limit;
 - line drag per half segment (the exact 3x3 Jacobian of the Morison drag, ``hydro.add_slender_drag_dv``,
   skipped where h times its damping rate is below ``DRAG_SKIP`` of the node mass, i.e. where explicit drag is
   far from any limit); point-mass drag;
