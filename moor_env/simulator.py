@@ -256,10 +256,9 @@ class Simulator:
         back end along the anchor's axis towards the tip [m] (negative: every node is behind the back end), and
         that node's distance from the axis [m].
 
-        Why: the lines have no contact with the anchor's body. A chain that falls faster than the anchor (lengthwise,
-        with the seed's tangential drag, it does) reaches the back end during the fall and passes into the body
-        instead of piling onto it; where this happens, the touchdown rests on a part of the fall the model does not
-        represent (README, "Accuracy of the fall").
+        Why: a chain that falls faster than the anchor (lengthwise, with the seed's tangential drag, it does)
+        reaches the back end during the fall. With the line-anchor contact (``discretization.line_anchor_contact``)
+        it lands there and this is about 0; without it the chain passes into the body.
         """
         st = self.state
         idx = self.model.lines[line].index

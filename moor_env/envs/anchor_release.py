@@ -188,8 +188,8 @@ class AnchorReleaseEnv(gym.Env):
     ...), ``t_s`` (time since the first observation [s]), ``released``, ``spacing_m``, ``max_tension_n`` per line,
     after the release ``fall_resolution`` (``preset``, ``tight_line``, or why the switch was refused) and at
     touchdown ``touchdown`` (speed_m_s, vertical_speed_m_s, tilt_deg, offset_m, fall_time_s, chain_on_seabed_m,
-    chain_past_back_end_m: how far the vertical chain has fallen past the anchor's back end, positive where it has
-    passed into the body, which the model has no contact to stop; README "Accuracy of the fall");
+    chain_past_back_end_m: how far the vertical chain has fallen past the anchor's back end, about 0 where it has
+    landed on it (the line-anchor contact), positive where it has passed into the body (contact off);
     ``reset`` returns the ``scenario``, the draws refused before it (``scenario_redraws``: scenarios without an
     equilibrium) and where its equilibrium came from (``statics``: ``solved``, or ``memory`` for a geometry
     drawn again).

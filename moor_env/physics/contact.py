@@ -30,10 +30,10 @@ point whose velocity enters w, so the contact's power is -F . w: the spring stor
   the normal damping c, so the friction is no stiffer for the explicit step than the normal law (under an impact
   N is large and the stick zone widens to mu N / c).
 
-Jacobians (:func:`node_contact`): dF/dx and dF/dv, exact (including the turning of the
-normal, the body's rotation and the friction's dependence on the normal force; checked against central
-differences), for the implicit step (which takes their symmetric part) and the static solver. The body's state
-is held fixed: the anchor is explicit in the implicit step.
+Jacobians (:func:`node_contact`): dF/dx and dF/dv, exact (including the turning of the normal, the body's rotation
+and the friction's dependence on the normal force; checked against central differences), the body's state held
+fixed. The implicit step (``implicit_contact.py``) takes their symmetric, positive part: k n n^T and the damping.
+The static solver leaves the contact out (``moor_env.contact_model``).
 
 The numbers (stiffness, restitution, friction) and the shape are chosen in ``physics/contact_setup.py``.
 """
@@ -219,12 +219,14 @@ def add_contact_reaction(load, body_state, px, py, pz, fx, fy, fz):
 
 
 @jit
-def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_state, shape, contact_f, contact_out):
+def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_state, shape, contact_f, contact_out,
+                      seabed_z):
     """Add the contact force of every free node inside the anchor to ``node_force`` and fill ``contact_out``
     (``CO_*``); returns the reaction on the anchor (F [N], M about the COG [N m]) as six floats.
 
     The node's mass in the damping is its structural mass (``node_mass``, welded parts included); its added mass
-    (a few % for chain) only makes the contact slightly softer and less damped than chosen.
+    (a few % for chain) only makes the contact slightly softer and less damped than chosen. Nodes below the seabed
+    (``seabed_z`` [m]) are left to the seabed: there the anchor is in the soil, which strips a line off it.
     """
     lx = ly = lz = mx = my = mz = 0.0
     count = 0
@@ -235,7 +237,7 @@ def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_st
         px = node_pos[n, 0]
         py = node_pos[n, 1]
         pz = node_pos[n, 2]
-        if not within_reach(px, py, pz, body_state, shape):
+        if pz < seabed_z or not within_reach(px, py, pz, body_state, shape):
             continue
         depth, fx, fy, fz = contact_force(px, py, pz, node_vel[n, 0], node_vel[n, 1], node_vel[n, 2], node_mass[n],
                                           body_state, shape, contact_f)
@@ -260,28 +262,3 @@ def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_st
     contact_out[CO_DEPTH] = deepest
     contact_out[CO_PEAK_DEPTH] = max(contact_out[CO_PEAK_DEPTH], deepest)
     return lx, ly, lz, mx, my, mz
-
-
-@jit
-def add_contact_stiffness(dmat, orow_eff, body_node, node_pos, body_state, shape, contact_f):
-    """Add the contact's normal stiffness k n n^T to the static solver's diagonal block ``dmat[e]`` of every free
-    node e inside the anchor (``orow_eff[n]``: the unknown that carries node n; itself for a free node).
-
-    The turning of the normal (-f_n H, a negative stiffness across a convex surface) is left out: Newton's blocks
-    stay positive where a step overshoots into the anchor, and the exact residual decides convergence.
-    """
-    k = contact_f[CF_STIFFNESS]
-    for n in range(node_pos.shape[0]):
-        if orow_eff[n] != n or n == body_node:
-            continue
-        px = node_pos[n, 0]
-        py = node_pos[n, 1]
-        pz = node_pos[n, 2]
-        if not within_reach(px, py, pz, body_state, shape):
-            continue
-        sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(px, py, pz, body_state, shape)
-        if sd < 0.0:
-            normal = (nx, ny, nz)
-            for i in range(3):
-                for j in range(3):
-                    dmat[n, i, j] += k * normal[i] * normal[j]

@@ -34,6 +34,7 @@ from moor_env.physics.layout import (
     CF_ZETA,
     CO_FORCE,
     CO_PEAK_FORCE,
+    EF_DEPTH,
     NI_KIND,
     NODE_FREE,
 )
@@ -164,7 +165,8 @@ def init_contact_set(model, state):
         contact_set[n] = SET_OUT
         if node_i[n, NI_KIND] != NODE_FREE:
             continue
-        if not within_reach(p[n, 0], p[n, 1], p[n, 2], state.body_state, model.contact_shape):
+        if p[n, 2] < -model.env_f[EF_DEPTH] or not within_reach(p[n, 0], p[n, 1], p[n, 2], state.body_state,
+                                                                model.contact_shape):
             continue
         if surface_distance(p[n, 0], p[n, 1], p[n, 2], state.body_state, model.contact_shape)[0] < 0.0:
             contact_set[n] = SET_IN
@@ -213,6 +215,8 @@ def update_contact_set(h, model, state):
         mode = contact_set[n]
         if node_i[n, NI_KIND] != NODE_FREE or mode == SET_ENTERED or mode == SET_LEFT:
             continue
+        if mode == SET_OUT and p[n, 2] < -model.env_f[EF_DEPTH]:
+            continue  # below the seabed the anchor is in the soil (``contact.add_contact_loads``)
         wx, wy, wz = relative_velocity(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2], state.body_state)
         # reach: how far the node can move against the anchor in the step
         reach = h * (math.sqrt(wx * wx + wy * wy + wz * wz)

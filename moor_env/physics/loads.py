@@ -170,7 +170,7 @@ def compute_loads(model, state):
         body_loads(body_state, body_f, body_q, env_f, current_profile, body_load)
         if model.contact_f[CF_ON] != 0.0:
             reaction = add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_state,
-                                         model.contact_shape, model.contact_f, state.contact_out)
+                                         model.contact_shape, model.contact_f, state.contact_out, -env_f[EF_DEPTH])
             for c in range(6):
                 body_load[c] += reaction[c]
         for n in range(nn):

@@ -39,12 +39,12 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from moor_env.compile import VESSEL_SECOND
+from moor_env.contact_model import without_line_anchor_contact
 from moor_env.errors import ConfigError, NoEquilibrium, SimulationDiverged, StaticsNotConverged
 from moor_env.physics import layout as L
 from moor_env.physics import statics_relaxation
 from moor_env.physics._jit import jit_step
 from moor_env.physics.anchor import rotate_axis
-from moor_env.physics.contact import add_contact_stiffness
 from moor_env.physics.environment import current_velocity
 from moor_env.physics.hydro import slender_drag_dq
 from moor_env.physics.integrate import INTEGRATOR_IMPLICIT_EULER, compute_loads, set_constrained_nodes
@@ -281,14 +281,11 @@ def _solve_body(tau, p, basis, res_body, body_state, node_f, node_force, body_f,
 @jit_step
 def _newton_step(tau, nq, body_node, basis, res_body, dq, node_pos, body_state, node_f, seg_i, seg_f, mat_f,
                  body_f, env_f, current_profile, node_force, node_mass, node_contact, node_acc, seg_tension, dmat,
-                 coupling, tree, orow, model):
+                 coupling, tree, orow):
     """Solve (D / tau^2 + K) dx = F into node_acc (free nodes) and dq (anchor) by block elimination over the
     tree, leaves first (x_c = D_c^-1 (r_c - K_cp x_p) once the parent p is known)."""
     _assemble(tau, body_node, node_pos, seg_i, seg_f, mat_f, env_f, current_profile, node_mass, node_contact,
               seg_tension, dmat, coupling, orow)
-    if model.contact_f[L.CF_ON] != 0.0:
-        add_contact_stiffness(dmat, orow[:, OR_EFF], body_node, node_pos, body_state, model.contact_shape,
-                              model.contact_f)
     for n in range(node_pos.shape[0]):
         if orow[n, OR_EFF] == n:
             for c in range(3):
@@ -444,7 +441,7 @@ def newton_statics(ctl, max_iter, body_node, node_pos, node_vel, body_state, bod
         ctl[C_PHASE_IT] += 1.0
         _newton_step(tau, nq, body_node, basis, res_body, dq, node_pos, body_state, node_f, seg_i, seg_f, mat_f,
                      body_f, env_f, current_profile, node_force, node_mass, node_contact, node_acc, seg_tension,
-                     dmat, coupling, tree, orow, model)
+                     dmat, coupling, tree, orow)
         biggest = 0.0
         for n in range(nn):
             if node_i[n, L.NI_KIND] == L.NODE_FREE:
@@ -638,6 +635,7 @@ def _run_chunk(sim, ctl: np.ndarray, max_iter: int, tol_rel: float, best: tuple[
 METHODS = ("auto", "newton", "relaxation")
 
 
+@without_line_anchor_contact
 def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = 600, max_step_m: float = 20.0,
                       warm: bool = False, analytic_guess: bool = True, progress: bool = True,
                       method: str = "auto") -> StaticsReport:
@@ -675,6 +673,7 @@ def _as_not_converged(exc: Exception) -> StaticsNotConverged:
     return StaticsNotConverged(f"static solve failed: its relaxation diverged ({exc})")
 
 
+@without_line_anchor_contact
 def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = 600, max_step_m: float = 20.0,
                       warm: bool = False, analytic_guess: bool = True, progress: bool = True) -> StaticsReport:
     """Drive the simulator's current state to static equilibrium in place.

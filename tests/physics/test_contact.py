@@ -426,3 +426,27 @@ def test_catch_up_of_the_seeds_chain():
     assert dnv.chain_terminal_m_s == pytest.approx(5.1, abs=0.1)
     assert not dnv.needed(1.0) and not dnv.needed(0.25)
     assert dnv.contact_speed_m_s == CS.MIN_CONTACT_SPEED_M_S
+
+
+def test_implicit_linearisation_is_the_laws_derivative():
+    """Reference: the law's exact Jacobians (:func:`contact.node_contact`). The implicit step's block
+    h C + h^2 K (``implicit_contact.contact_terms``) is h (-dF/dv) + h^2 k n n^T where the friction's damping is at
+    its cap (then -dF/dv = c I, symmetric), and k = n^T (-dF/dx) n (1e-9 relative)."""
+    from moor_env.physics import implicit_contact as IC
+
+    state = body()
+    cf = params()
+    h = 0.01125
+    x = point(state, S_BACK_M + 0.006, 0.2)
+    v = np.array([0.3, 0.0, -8.0])
+    jac = np.zeros((2, 3, 3))
+    depth, *_ = C.node_contact(*x, *v, MASS_KG, state, SHAPE, cf, jac)
+    d, nx, ny, nz, wx, wy, wz = IC.contact_state(*x, *v, state, SHAPE)
+    assert d == pytest.approx(depth, rel=1e-12)
+    block = IC.contact_terms(h, IC.SET_IN, d, nx, ny, nz, wx, wy, wz, MASS_KG, cf, 0.0, 0.0, 0.0)[:6]
+    n = np.array([nx, ny, nz])
+    k = n @ (-jac[0]) @ n
+    assert k == pytest.approx(cf[L.CF_STIFFNESS], rel=1e-9)
+    expected = h * -jac[1] + h * h * k * np.outer(n, n)
+    got = np.array([[block[0], block[3], block[4]], [block[3], block[1], block[5]], [block[4], block[5], block[2]]])
+    assert np.allclose(got, expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max())

@@ -150,13 +150,16 @@ def test_relaxation_rounds_continue_only_while_the_residual_shrinks(monkeypatch,
 # --- the Newton solver (moor_env.physics.statics) ----------------------------------------------------------------
 def _residual_ratio(static) -> float:
     """Largest free-node residual over the node's weight at the solution, on the smoothed law the solver ends on."""
+    from moor_env import Simulator
+    from moor_env.contact_model import without_line_anchor_contact
     from moor_env.physics.statics import SMOOTHING_FINAL
 
     sim = static.simulator
     assert sim.env_f[L.EF_SLACK_SMOOTHING] == 0.0 and sim.env_f[L.EF_SEABED_SMOOTHING] == 0.0
     sim.env_f[L.EF_SLACK_SMOOTHING] = SMOOTHING_FINAL  # the exact seabed contact, the tension law of the final level
     try:
-        sim.evaluate_loads()
+        # the problem the solver solves: without the line-anchor contact (moor_env.contact_model)
+        without_line_anchor_contact(Simulator.evaluate_loads)(sim)
     finally:
         sim.env_f[L.EF_SLACK_SMOOTHING] = 0.0
     free = sim.state.node_i[:, L.NI_KIND] == L.NODE_FREE

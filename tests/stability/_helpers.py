@@ -26,12 +26,14 @@ def max_node_speed(sim: Simulator) -> float:
 
 def run_checked(sim: Simulator, t_end: float, chunk_s: float = 0.25, speed_bound_m_s: float = 80.0,
                 detect_touchdown: bool = False) -> int:
-    """Advance in chunks, asserting a finite state and bounded node speeds (bounded kinetic energy) throughout."""
+    """Advance in chunks, asserting a finite state, bounded node speeds (bounded kinetic energy) and, with the
+    line-anchor contact, no node more than 5 cm inside the anchor throughout."""
     status = L.STATUS_TIME_LIMIT
     while sim.state.t < t_end - 0.5 * sim.dt:
         status, _ = sim.advance_to(min(sim.state.t + chunk_s, t_end), detect_touchdown=detect_touchdown)
         assert_finite_state(sim)
         assert max_node_speed(sim) < speed_bound_m_s
+        assert sim.contact_report()["peak_depth_m"] < 0.05
         if status == L.STATUS_TOUCHDOWN:
             break
     return status

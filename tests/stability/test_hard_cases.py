@@ -14,6 +14,8 @@ from ._helpers import assert_finite_state, max_node_speed, run_checked
 
 FINE = {"discretization.vertical_chain_segment_m": 0.5, "discretization.loop_chain_segment_m": 0.5}
 
+NO_CONTACT = {"discretization.line_anchor_contact": "off"}
+
 
 def test_loop_snapping_taut_under_fast_haul_in():
     """Wide spacing (170 m), short vertical chain (10 m) and the mooring winch hauling in at 1 m/s for 15 s
@@ -41,13 +43,15 @@ def test_very_short_chain_elements_at_the_default_step():
 def test_3000_m_depth_with_a_3000_m_wire():
     """3000 m depth (a 2867 m wire, 3200 m mooring line, spacing 300 m): statics converge with the tip at the
     drop height and the fall matches the 500 m scene within 2 % (the anchor and its 150 m of bottom chain
-    dominate; the wire is cut at release)."""
-    overrides = {"water_depth_m": 3000.0, "vessel_spacing_m": 300.0, "mooring_line_length_m": 3200.0}
+    dominate; the wire is cut at release). Both without the line-anchor contact: with it the 500 m scene's vertical
+    chain snaps taut before touchdown and its speed depends on the snaps' timing (docs/model.md), which is not
+    what this compares."""
+    overrides = {"water_depth_m": 3000.0, "vessel_spacing_m": 300.0, "mooring_line_length_m": 3200.0, **NO_CONTACT}
     static = solve_statics(load_scene("gjoa-500", overrides))
     assert static.tip_height_above_seabed_m == pytest.approx(68.5, abs=1e-3)
     assert static.wire_length_m == pytest.approx(2867.0, rel=0.01)
     result = run_drop(static.simulator)
-    shallow = simulate_drop("gjoa-500", {"vessel_spacing_m": 300.0 * 500 / 3000})
+    shallow = simulate_drop("gjoa-500", {"vessel_spacing_m": 300.0 * 500 / 3000, **NO_CONTACT})
     assert result.touchdown_speed_m_s == pytest.approx(shallow.touchdown_speed_m_s, rel=0.02)
 
 
@@ -112,8 +116,9 @@ def test_vertical_chain_slack_during_the_fall():
 def test_chain_hitting_the_seabed_at_speed():
     """After touchdown the run goes on (the anchor has no soil model and passes the seabed): the vertical chain
     and loop hit the seabed at 20+ m/s. Contact must stop them without blow-up: finite state, bounded speeds,
-    shallow penetration, chain lying on the seabed."""
-    sim = solve_statics(load_scene("gjoa-500")).simulator
+    shallow penetration, chain lying on the seabed. Without the line-anchor contact: the anchor has no soil to
+    stop it, and the contact would carry the chain on its back end down with it."""
+    sim = solve_statics(load_scene("gjoa-500", NO_CONTACT)).simulator
     sim.release()
     run_checked(sim, 6.0, detect_touchdown=True)
     speed_at_impact = max_node_speed(sim)
