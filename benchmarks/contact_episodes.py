@@ -67,13 +67,18 @@ def summarize(rows: list[dict]) -> dict:
             "chain_past_max_m": float(max(past)) if past else float("nan")}
 
 
+def docs_from_results() -> list[tuple[Path, str, str]]:
+    """:func:`docs_blocks` of the committed ``benchmarks/results/contact_episodes.json``."""
+    return docs_blocks(load_result("contact_episodes"))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--episodes", type=int, default=1000)
     parser.add_argument("--docs-only", action="store_true")
     args = parser.parse_args()
     if args.docs_only:
-        write_blocks(docs_blocks(load_result("contact_episodes")))
+        write_blocks(docs_from_results())
         return
     load = os.getloadavg()[0]
     env = gym.make("moor_env/AnchorRelease-v0")

@@ -277,7 +277,7 @@ def implicit_euler_update(model, state, h, reuse_order):
     nq = prepare(reuse_order, body_node, state, tree, orow)
     contact = body_active and model.contact_f[CF_ON] != 0.0
     if contact:
-        init_contact_set(model, state)
+        init_contact_set(h, model, state)
     c0 = c1 = c2 = c3 = c4 = c5 = 0.0
     for it in range(MAX_ACTIVE_SET_SOLVES):
         assemble(h, it == 0, body_node, model, state, orow)

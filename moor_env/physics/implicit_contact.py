@@ -45,6 +45,8 @@ SET_OUT = 0  # outside, no contact this step
 SET_IN = 1  # inside at the start of the step
 SET_ENTERED = 2  # outside at the start, predicted inside at its end (linear law from the start)
 SET_LEFT = 3  # inside at the start, predicted outside at its end (no force)
+SET_COMING = 4  # outside at the start, inside at its end at its start velocity: in the first solve as SET_ENTERED
+SET_MISSED = 5  # SET_COMING whose solve ends it outside: out, and it may still enter once
 DEPTH_TOLERANCE_M = 1e-6  # a node must miss its predicted set by this much before the step is solved again
 
 
@@ -155,21 +157,39 @@ def contact_force_change(h, mode, depth, nx, ny, nz, wx, wy, wz, mass_kg, contac
     return fx, fy, fz
 
 
+@jit_step
+def _law_mode(mode):
+    """The law a contact-set state applies: a coming node's that of an entering one, a missed node's none."""
+    if mode == SET_COMING:
+        return SET_ENTERED
+    if mode == SET_MISSED:
+        return SET_OUT
+    return mode
+
+
 @jit_no_refcount
-def init_contact_set(model, state):
-    """Start of a step: every free node within reach and inside the anchor is in the contact set."""
+def init_contact_set(h, model, state):
+    """Start of a step: every free node inside the anchor is in the contact set (``SET_IN``), and every node that
+    reaches it within the step at its present velocity joins it (``SET_COMING``), so that a node resting on or
+    landing on the anchor needs no second solve."""
     contact_set = state.contact_set
     node_i = state.node_i
     p = state.node_pos
+    v = state.node_vel
     for n in range(node_i.shape[0]):
         contact_set[n] = SET_OUT
-        if node_i[n, NI_KIND] != NODE_FREE:
+        if node_i[n, NI_KIND] != NODE_FREE or p[n, 2] < -model.env_f[EF_DEPTH]:
             continue
-        if p[n, 2] < -model.env_f[EF_DEPTH] or not within_reach(p[n, 0], p[n, 1], p[n, 2], state.body_state,
-                                                                model.contact_shape):
+        wx, wy, wz = relative_velocity(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2], state.body_state)
+        reach = h * math.sqrt(wx * wx + wy * wy + wz * wz)
+        if not within_reach(p[n, 0], p[n, 1], p[n, 2], state.body_state, model.contact_shape, reach):
             continue
-        if surface_distance(p[n, 0], p[n, 1], p[n, 2], state.body_state, model.contact_shape)[0] < 0.0:
+        sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(p[n, 0], p[n, 1], p[n, 2], state.body_state,
+                                                               model.contact_shape)
+        if sd < 0.0:
             contact_set[n] = SET_IN
+        elif predicted_depth(h, -sd, nx, ny, nz, wx, wy, wz, 0.0, 0.0, 0.0) > DEPTH_TOLERANCE_M:
+            contact_set[n] = SET_COMING
 
 
 @jit_no_refcount
@@ -182,7 +202,7 @@ def assemble_contact(h, model, state):
     node_mm = state.node_mm
     node_acc = state.node_acc
     for n in range(contact_set.shape[0]):
-        mode = contact_set[n]
+        mode = _law_mode(contact_set[n])
         if mode == SET_OUT:
             continue
         depth, nx, ny, nz, wx, wy, wz = contact_state(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2],
@@ -215,7 +235,7 @@ def update_contact_set(h, model, state):
         mode = contact_set[n]
         if node_i[n, NI_KIND] != NODE_FREE or mode == SET_ENTERED or mode == SET_LEFT:
             continue
-        if mode == SET_OUT and p[n, 2] < -model.env_f[EF_DEPTH]:
+        if (mode == SET_OUT or mode == SET_MISSED) and p[n, 2] < -model.env_f[EF_DEPTH]:
             continue  # below the seabed the anchor is in the soil (``contact.add_contact_loads``)
         wx, wy, wz = relative_velocity(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2], state.body_state)
         # reach: how far the node can move against the anchor in the step
@@ -226,11 +246,14 @@ def update_contact_set(h, model, state):
         depth, nx, ny, nz, wx, wy, wz = contact_state(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2],
                                                       state.body_state, model.contact_shape)
         end = predicted_depth(h, depth, nx, ny, nz, wx, wy, wz, dv[n, 0], dv[n, 1], dv[n, 2])
-        if mode == SET_OUT and end > DEPTH_TOLERANCE_M:
+        if (mode == SET_OUT or mode == SET_MISSED) and end > DEPTH_TOLERANCE_M:
             contact_set[n] = SET_ENTERED
             changed += 1
         elif mode == SET_IN and end < -DEPTH_TOLERANCE_M:
             contact_set[n] = SET_LEFT
+            changed += 1
+        elif mode == SET_COMING and end < -DEPTH_TOLERANCE_M:
+            contact_set[n] = SET_MISSED
             changed += 1
     return changed
 
@@ -248,7 +271,7 @@ def contact_reaction(h, model, state):
     any_contact = False
     tx = ty = tz = 0.0
     for n in range(contact_set.shape[0]):
-        mode = contact_set[n]
+        mode = _law_mode(contact_set[n])
         if mode == SET_OUT:
             continue
         any_contact = True
