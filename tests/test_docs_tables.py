@@ -14,7 +14,8 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from _docs import read_block  # noqa: E402
 
-BENCHMARKS = ("bench_drop", "bench_env", "bench_implicit_step", "bench_rllib", "fall_reference", "fall_step",
+BENCHMARKS = ("bench_drop", "bench_env", "bench_implicit_step", "bench_rllib", "contact_cost", "contact_episodes",
+              "fall_reference", "fall_step",
               "mbl_exceedance", "pre_release_step", "remesh_at_release", "robustness", "speed_vs_error", "statics")
 
 
