@@ -14,7 +14,8 @@ The functions on :class:`Section` lists are the analytic references of the stati
 the end take a line as arrays (weight per metre, EA, unstretched length per section, from end A to end B) and
 give the static solver its first guess in microseconds: :func:`hang_line` places a line's nodes between two
 points, fully suspended or with a grounded middle (touchdown on both sides of a flat, frictionless seabed), and
-lays any length that cannot hang as a zero-tension fold on the seabed.
+lays any length that cannot hang as a zero-tension fold on the seabed. ``physics/discrete_catenary.py`` turns
+that shape into the lumped-mass model's own equilibrium.
 """
 
 from __future__ import annotations
@@ -195,6 +196,22 @@ def walk(h, v0, sec_w, sec_ea, sec_len, a0, a1):
             v += sec_w[k] * (hi - lo)
         start = end
     return x, z, v
+
+
+@jit
+def walk_arcs(h, v0, sec_w, sec_ea, sec_len, arcs, out):
+    """(dx, dz) from arc 0 (vertical force v0 there) to each of the ascending unstretched ``arcs`` into ``out``."""
+    x = 0.0
+    z = 0.0
+    v = v0
+    a = 0.0
+    for i in range(arcs.shape[0]):
+        dx, dz, v = walk(h, v, sec_w, sec_ea, sec_len, a, arcs[i])
+        x += dx
+        z += dz
+        a = arcs[i]
+        out[i, 0] = x
+        out[i, 1] = z
 
 
 @jit
@@ -411,90 +428,3 @@ def _hang_grounded(dx, dz, seabed_dz, sec_w, sec_ea, sec_len, total, weight, arc
             out[i, 0] = x_td + grounded * stretch - 2.0 * fold + x_b
             out[i, 1] = seabed_dz + z_b
     return h, -v_top_a, mode  # end A holds its suspended part: the line pulls it down
-
-
-@jit
-def discrete_walk(h, va, node_w, seg_l0, seg_ea, out):
-    """Node positions of the lumped-mass line in equilibrium under (H, V_A) at its end A, relative to A.
-
-    The exact statics of the discrete model without current or seabed: every segment carries the horizontal force
-    h, segment k the vertical force V_k = V_A + (weights of nodes 1..k), and is stretched by its tension. Writes
-    the (horizontal, vertical) offsets of nodes 1..n into ``out`` (``node_w[k]``: weight of node k [N]) and
-    returns those of the last node.
-    """
-    x = 0.0
-    z = 0.0
-    v = va
-    for k in range(seg_l0.shape[0]):
-        if k > 0:
-            v += node_w[k]
-        t = math.sqrt(h * h + v * v)
-        stretched = seg_l0[k] * (1.0 + t / seg_ea[k])
-        if t > 0.0:
-            x += stretched * h / t
-            z += stretched * v / t
-        out[k, 0] = x
-        out[k, 1] = z
-    return x, z
-
-
-@jit
-def discrete_hang(dx, dz, h0, va0, node_w, seg_l0, seg_ea, out):
-    """(H, V_A) of the suspended lumped-mass line whose last node reaches (dx, dz), by Newton's method on
-    (log H, V_A) from a guess (the continuous catenary's); returns (H, V_A, converged)."""
-    u = math.log(max(h0, 1e-6))
-    va = va0
-    scale = 0.0
-    for k in range(seg_l0.shape[0]):
-        scale += seg_l0[k]
-    for _ in range(50):
-        x, z = discrete_walk(math.exp(u), va, node_w, seg_l0, seg_ea, out)
-        fx = x - dx
-        fz = z - dz
-        if abs(fx) < 1e-9 * scale and abs(fz) < 1e-9 * scale:
-            return math.exp(u), va, True
-        du = 1e-7
-        dv = 1e-7 * (abs(va) + math.exp(u)) + 1e-6
-        x1, z1 = discrete_walk(math.exp(u + du), va, node_w, seg_l0, seg_ea, out)
-        x2, z2 = discrete_walk(math.exp(u), va + dv, node_w, seg_l0, seg_ea, out)
-        a11 = (x1 - x) / du
-        a21 = (z1 - z) / du
-        a12 = (x2 - x) / dv
-        a22 = (z2 - z) / dv
-        det = a11 * a22 - a12 * a21
-        if det == 0.0 or det != det:
-            break
-        step_u = -(a22 * fx - a12 * fz) / det
-        step_v = -(-a21 * fx + a11 * fz) / det
-        if abs(step_u) > 1.0:  # H changes by e at most per iteration
-            step_v *= 1.0 / abs(step_u)
-            step_u = math.copysign(1.0, step_u)
-        u += step_u
-        va += step_v
-    discrete_walk(math.exp(u), va, node_w, seg_l0, seg_ea, out)
-    return math.exp(u), va, False
-
-
-@jit
-def discrete_rise_h(rise, node_w, seg_l0, seg_ea, out):
-    """Horizontal force under which the lumped-mass line rising from a touchdown node (segment 0 starts there,
-    horizontal: no vertical force) climbs ``rise`` by its last node; returns (H, converged) and the node offsets
-    from the touchdown in ``out``. The rise falls as H grows: bisection on log H."""
-    weight = 0.0
-    for k in range(1, node_w.shape[0]):
-        weight += node_w[k]
-    lo = math.log(1e-9 * weight + 1e-6)
-    hi = math.log(1e3 * weight + 1.0)
-    if discrete_walk(math.exp(lo), 0.0, node_w, seg_l0, seg_ea, out)[1] < rise:
-        return math.exp(lo), False  # too short to rise that far even hanging straight
-    for _ in range(ROOT_ITERATIONS):
-        mid = 0.5 * (lo + hi)
-        if discrete_walk(math.exp(mid), 0.0, node_w, seg_l0, seg_ea, out)[1] > rise:
-            lo = mid
-        else:
-            hi = mid
-        if hi - lo < 1e-12:
-            break
-    h = math.exp(0.5 * (lo + hi))
-    discrete_walk(h, 0.0, node_w, seg_l0, seg_ea, out)
-    return h, True

@@ -20,8 +20,9 @@ import numpy as np
 
 from moor_env.errors import NoEquilibrium
 from moor_env.physics import layout as L
-from moor_env.physics.catenary import discrete_hang, discrete_rise_h, hang_line, walk
-from moor_env.physics.integrate import set_constrained_nodes
+from moor_env.physics.catenary import hang_line, walk, walk_arcs
+from moor_env.physics.discrete_catenary import discrete_grounded, discrete_hang
+from moor_env.physics.loads import set_constrained_nodes
 
 BALANCE_ROUNDS = 60
 MIN_WIRE_M = 1.0  # shortest wire the solver accepts between the installation vessel and the release point
@@ -53,28 +54,21 @@ def _interior_nodes(sim, name: str) -> np.ndarray:
 
 
 def _hang(sim, name: str, a: np.ndarray, b: np.ndarray, place: bool) -> tuple[float, float, float, int]:
-    """Hang a line from point a (its bottom end) to b; returns (H, V_A, top tension) [N] and the shape's mode
-    (``catenary.hang_line``: 0 suspended, 1 grounded, 2 folded on the seabed) and, with ``place``,
-    puts its interior nodes on the shape: the discrete model's own equilibrium where the line hangs free (its
-    segments are chords, shorter than the arcs of a tightly curved catenary), the continuous catenary where it
-    touches the seabed."""
+    """Hang a line from point a (its bottom end) to b; returns (H, V_A, top tension) [N] of the continuous elastic
+    catenary and its mode (``catenary.hang_line``: 0 suspended, 1 grounded, 2 folded on the seabed) and, with
+    ``place``, puts its interior nodes where the discrete model is in equilibrium
+    (``physics/discrete_catenary.py``): its segments are chords, shorter than the arcs of a tightly curved
+    catenary, and near a touchdown with little horizontal force the catenary bends within one segment."""
     sec_w, sec_ea, sec_len, _, arcs = line_arrays(sim, name)
     horizontal = b[:2] - a[:2]
     dx = float(np.hypot(*horizontal))
     u = horizontal / dx if dx > 1e-9 else np.array([1.0, 0.0])
-    seabed_dz = -sim.env_f[L.EF_DEPTH] - float(a[2])
+    seabed_dz = min(-sim.env_f[L.EF_DEPTH] - float(a[2]), 0.0)
     out = np.zeros((arcs.size, 2))
     dz = float(b[2] - a[2])
-    h, v_a, mode = hang_line(dx, dz, min(seabed_dz, 0.0), sec_w, sec_ea, sec_len, arcs, out)
+    h, v_a, mode = hang_line(dx, dz, seabed_dz, sec_w, sec_ea, sec_len, arcs, out)
     if place:
-        if mode == 0:
-            node_w, seg_l0, seg_ea = _lumped(sim, name)
-            walked = np.zeros((seg_l0.size, 2))
-            h_d, v_d, ok = discrete_hang(dx, dz, h, v_a, node_w, seg_l0, seg_ea, walked)
-            if ok and np.min(walked[:, 1]) >= seabed_dz:
-                out[:] = walked[:-1]
-        elif mode == 1:
-            _discrete_suspended_parts(sim, name, out, h, dx, dz, seabed_dz)
+        _discrete_shape(sim, name, out, h, v_a, mode, dx, dz, seabed_dz)
         nodes = _interior_nodes(sim, name)
         pos = sim.state.node_pos
         pos[nodes, 0] = a[0] + u[0] * out[:, 0]
@@ -84,49 +78,33 @@ def _hang(sim, name: str, a: np.ndarray, b: np.ndarray, place: bool) -> tuple[fl
     return h, v_a, top, mode
 
 
-def _discrete_suspended_parts(sim, name: str, out: np.ndarray, h: float, dx: float, dz: float,
-                              seabed_dz: float) -> None:
-    """Replace the two suspended parts of a grounded line's catenary shape in ``out`` by the discrete model's
-    own equilibrium rising from each touchdown node to its end (near a touchdown with little horizontal force
-    the catenary bends within one segment, where chords and arcs differ most), and lay the nodes between the two
-    touchdowns evenly on the seabed."""
-    grounded = np.nonzero(out[:, 1] <= seabed_dz + 1e-9)[0]
-    if grounded.size == 0:
-        return
+def _discrete_shape(sim, name: str, out: np.ndarray, h: float, v_a: float, mode: int, dx: float, dz: float,
+                    seabed_dz: float) -> None:
+    """Replace the continuous shape in ``out`` by the discrete model's equilibrium: hanging free where it stays
+    clear of the seabed, else across the seabed from the touchdown nodes nearest the catenary's (the discrete
+    line may hang clear where the catenary just touches, and touch where it just hangs clear)."""
     node_w, seg_l0, seg_ea = _lumped(sim, name)
-    j, j2 = int(grounded[0]) + 1, int(grounded[-1]) + 1  # local indices of the two touchdown nodes
+    walked = np.zeros((seg_l0.size, 2))
+    if mode == 0:
+        _, _, ok = discrete_hang(dx, dz, h, v_a, node_w, seg_l0, seg_ea, walked)
+        if ok and np.min(walked[:, 1]) >= seabed_dz:
+            out[:] = walked[:-1]
+            return
     n = seg_l0.size
-    new = out.copy()
-    x_a = 0.0
-    ok = j < 1
-    while not ok and j < j2:  # from touchdown node j back up to end A: segments j-1 .. 0
-        piece = np.zeros((j, 2))
-        _, ok = discrete_rise_h(-seabed_dz, node_w[1:j + 1][::-1].copy(), seg_l0[:j][::-1].copy(),
-                                seg_ea[:j][::-1].copy(), piece)
-        j += 0 if ok else 1  # too short to rise to end A: touch down one node further on
-    if not ok:
-        return
-    if j >= 1:
-        x_a = float(piece[-1, 0])  # the touchdown lies this far from end A
-        for k in range(j - 1):  # local node j - 1 - k
-            new[j - 2 - k] = (x_a - piece[k, 0], seabed_dz + piece[k, 1])
-    x_b = dx
-    ok = n - j2 < 1
-    while not ok and j2 > j:  # from touchdown node j2 up to end B: segments j2 .. n-1
-        piece = np.zeros((n - j2, 2))
-        _, ok = discrete_rise_h(dz - seabed_dz, node_w[j2:].copy(), seg_l0[j2:].copy(), seg_ea[j2:].copy(), piece)
-        j2 -= 0 if ok else 1
-    if not ok:
-        return
-    if n - j2 >= 1:
-        x_b = dx - float(piece[-1, 0])
-        for k in range(n - j2 - 1):  # local node j2 + 1 + k
-            new[j2 + k] = (x_b + piece[k, 0], seabed_dz + piece[k, 1])
-    # the grounded nodes j .. j2, evenly from one touchdown to the other
-    for local in range(j, j2 + 1):
-        f = (local - j) / max(j2 - j, 1)
-        new[local - 1] = (x_a + f * (x_b - x_a), seabed_dz)
-    out[:] = new
+    if n >= 3:
+        low = np.nonzero(out[:, 1] <= seabed_dz + 1e-9)[0]
+        lowest = int(np.argmin(out[:, 1]))
+        t_a, t_b = (int(low[0]) + 1, int(low[-1]) + 1) if low.size else (lowest + 1, lowest + 1)
+        grounded = np.zeros_like(out)
+        _, _, found = discrete_grounded(dx, dz, seabed_dz, h, min(max(t_a, 1), n - 1), min(max(t_b, 1), n - 1),
+                                        node_w, seg_l0, seg_ea, grounded)
+        if found:
+            out[:] = grounded
+            return
+    if mode != 0:
+        _, _, ok = discrete_hang(dx, dz, h, v_a, node_w, seg_l0, seg_ea, walked)
+        if ok and np.min(walked[:, 1]) >= seabed_dz:
+            out[:] = walked[:-1]
 
 
 def _lumped(sim, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -146,10 +124,9 @@ def _lumped(sim, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def _hang_vertical(sim, name: str, bottom: np.ndarray, bottom_force_n: float) -> float:
     """Hang a line straight up from ``bottom`` carrying ``bottom_force_n`` there; returns its stretched height."""
     sec_w, sec_ea, sec_len, _, arcs = line_arrays(sim, name)
-    nodes = _interior_nodes(sim, name)
-    pos = sim.state.node_pos
-    for node, arc in zip(nodes, arcs, strict=True):
-        pos[node] = bottom + np.array([0.0, 0.0, walk(0.0, bottom_force_n, sec_w, sec_ea, sec_len, 0.0, arc)[1]])
+    out = np.zeros((arcs.size, 2))
+    walk_arcs(0.0, bottom_force_n, sec_w, sec_ea, sec_len, arcs, out)
+    sim.state.node_pos[_interior_nodes(sim, name)] = bottom + out[:, 1, None] * np.array([0.0, 0.0, 1.0])
     return walk(0.0, bottom_force_n, sec_w, sec_ea, sec_len, 0.0, float(np.sum(sec_len)))[1]
 
 
@@ -263,10 +240,12 @@ def _balance_release_point(sim, release: np.ndarray, target_z: float, hang_n: fl
     total = float(np.sum(sec_len))
     st.seg_f[start:start + nseg, L.SF_L0] *= total / float(np.sum(st.seg_f[start:start + nseg, L.SF_L0]))
     arcs = np.cumsum(st.seg_f[start:start + nseg, L.SF_L0])[:-1]
+    out = np.zeros((arcs.size, 2))
+    walk_arcs(h_m, max(hang_n - v_m, 1e-3 * hang_n), sec_w, sec_ea, sec_len, arcs, out)
     nodes = _interior_nodes(sim, "wire")
-    for node, arc in zip(nodes, arcs, strict=True):
-        x, z, _ = walk(h_m, max(hang_n - v_m, 1e-3 * hang_n), sec_w, sec_ea, sec_len, 0.0, float(arc))
-        st.node_pos[node] = (release[0] - x * u[0], release[1] - x * u[1], release[2] + z)
+    st.node_pos[nodes, 0] = release[0] - out[:, 0] * u[0]
+    st.node_pos[nodes, 1] = release[1] - out[:, 0] * u[1]
+    st.node_pos[nodes, 2] = release[2] + out[:, 1]
     return release
 
 

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from moor_env import load_scene, solve_statics
+from moor_env.errors import ConfigError, NoEquilibrium
 from moor_env.physics import layout as L
 from moor_env.physics.catenary import Section, solve_grounded
 
@@ -192,6 +193,41 @@ def test_equilibrium_residual_on_random_scenes(overrides):
     assert static.tip_height_above_seabed_m == pytest.approx(overrides["drop_height_m"], abs=1e-3)
 
 
+def _long_line_scenes(n: int, seed: int) -> list[dict]:
+    """Long slack lines (1.1-1.3 depth) that rest on the seabed; drawn until ``n`` pass the scene checks."""
+    rng = np.random.default_rng(seed)
+    scenes = []
+    while len(scenes) < n:
+        depth = float(rng.uniform(300.0, 1500.0))
+        scene = {"water_depth_m": depth, "vessel_spacing_m": float(rng.uniform(0.0, 0.5) * depth),
+                 "mooring_line_length_m": float(rng.uniform(1.1, 1.3) * depth),
+                 "vertical_chain_length_m": float(rng.uniform(5.0, 60.0)),
+                 "drop_height_m": float(rng.uniform(30.0, 120.0)),
+                 "current_scale": float(rng.uniform(0.0, 1.5)),
+                 "current_direction_deg": float(rng.uniform(0.0, 360.0)),
+                 "anchor_mass_scale": float(rng.uniform(0.9, 1.1)), "fidelity": str(rng.choice(["fast", "default"]))}
+        try:
+            load_scene("gjoa-500", scene)
+        except ConfigError:
+            continue
+        scenes.append(scene)
+    return scenes
+
+
+@pytest.mark.parametrize("overrides", _long_line_scenes(8, seed=11))
+def test_long_slack_lines_on_the_seabed(overrides):
+    """Property (seeded draw, lines of 1.1-1.3 depth resting on the seabed, any spacing and current): Newton's
+    method alone reaches the equilibrium, residual below 1e-4 of every node's weight, or the scene is refused with
+    its cause (the fibre rope on the seabed)."""
+    try:
+        static = solve_statics(load_scene("gjoa-500", overrides), progress=False, method="newton")
+    except NoEquilibrium as exc:
+        assert exc.key == "installation.mooring_line_length_m" and "fibre" in exc.cause
+        return
+    assert _residual_ratio(static) < 1e-4
+    assert static.tip_height_above_seabed_m == pytest.approx(overrides["drop_height_m"], abs=1e-3)
+
+
 @pytest.mark.parametrize("name", ["seed000-chain-fibre", "seed004-chain-500"])
 def test_grounded_references_meet_the_residual_tolerance(name):
     """The seeds' grounded catenaries solve on the exact seabed contact: residual below 1e-4 of every node's
@@ -218,17 +254,35 @@ def test_newton_matches_the_relaxation_solver(overrides):
         assert static.top_tensions_n[line] == pytest.approx(tension, rel=1e-3)
 
 
-@pytest.mark.parametrize("overrides", [
+HARD = [
     {"vessel_spacing_m": 0.0},  # the loop hangs straight down from both ends
     {"mooring_line_length_m": 640.0, "vessel_spacing_m": 30.0},  # very slack
     {"current_scale": 1.5, "current_direction_deg": 180.0},  # current against the loop
     {"water_depth_m": 1500.0, "mooring_line_length_m": 1540.0, "vessel_spacing_m": 300.0},  # deep and wide
     {"vessel_spacing_m": 330.0, "mooring_line_length_m": 560.0},  # taut
-])
+    # from the statics benchmark, each unsolved by the earlier solver: excess line on the seabed without tension,
+    # vessels 12 m apart, in current
+    {"water_depth_m": 456.68, "vessel_spacing_m": 11.97, "mooring_line_length_m": 568.14,
+     "vertical_chain_length_m": 12.09, "drop_height_m": 42.17, "current_scale": 0.99, "current_direction_deg": 77.36,
+     "anchor_mass_scale": 1.06},
+    # a long line whose loop rests on the seabed at a low horizontal force, a 9 m vertical chain, strong current
+    {"water_depth_m": 987.05, "vessel_spacing_m": 148.52, "mooring_line_length_m": 1112.69,
+     "vertical_chain_length_m": 9.01, "drop_height_m": 54.26, "current_scale": 1.34, "current_direction_deg": 76.77,
+     "anchor_mass_scale": 0.93},
+    # a hairpin: 5 m apart in 338 m, the loop's bottom bends within a metre, 0.25 m chain
+    {"water_depth_m": 337.5315, "vessel_spacing_m": 5.2607,
+     "mooring_line_length_m": 372.5549, "vertical_chain_length_m": 53.2764,
+     "drop_height_m": 36.4253, "current_scale": 1.2444,
+     "current_direction_deg": 193.0079, "anchor_mass_scale": 1.0765,
+     "fidelity": "accurate"},
+]
+
+
+@pytest.mark.parametrize("overrides", HARD)
 def test_hard_scenes_converge(overrides):
-    """Hard geometries converge by Newton's method to the residual tolerance."""
-    static = solve_statics(load_scene("gjoa-500", {"fidelity": "fast", **overrides}), progress=False,
-                           method="newton")
+    """Hard geometries converge by Newton's method to the residual tolerance (1e-4 of every node's weight)."""
+    scene = {"fidelity": "fast", **overrides}
+    static = solve_statics(load_scene("gjoa-500", scene), progress=False, method="newton")
     assert _residual_ratio(static) < 1e-4
 
 
@@ -250,8 +304,6 @@ def test_grounded_line_leaves_the_vessels_where_they_were():
 
 def test_unknown_method_is_refused():
     """A misspelt solver is refused with the allowed names."""
-    from moor_env.errors import ConfigError
-
     with pytest.raises(ConfigError, match="auto"):
         solve_statics(load_scene("gjoa-500", {"fidelity": "fast"}), progress=False, method="Newton")
 
@@ -272,8 +324,6 @@ def test_statics_are_deterministic():
 def test_scenes_without_equilibrium_are_refused(overrides, key, cause):
     """A mooring line too short to reach the second vessel, one so long that its fibre rope rests on the seabed,
     and a drop height the water depth cannot hold are refused at once with the key to change and the cause."""
-    from moor_env.errors import ConfigError
-
     with pytest.raises(ConfigError, match=cause) as info:
         solve_statics(load_scene("gjoa-500", {"fidelity": "fast", **overrides}), progress=False)
     assert info.value.key == key

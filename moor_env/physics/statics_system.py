@@ -1,0 +1,375 @@
+"""The linear system of one step of the static solver (``physics/statics_newton.py``) and its O(N) solution.
+
+At a state x the residual F(x) is the net load on every free node and on the anchor from the dynamics' own load
+kernel (``loads.compute_loads``) with every velocity zero, so that current drag acts as a static load and the
+equilibrium is an exact rest state of the dynamic model. A step solves::
+
+    (D / tau^2 + K) dx = F(x) + G,
+
+D the node masses and the anchor's inertia (the pseudo-transient term), K = -dF/dx analytic: per segment
+dT/dl q q^T + (T / l)(I - q q^T) (elastic and geometric stiffness), the seabed's vertical stiffness, for the anchor
+J^T S J plus the geometric stiffness of its arms (a force f at axial coordinate s resists a tilt by s (e . f)),
+and the current drag's change with each segment's direction (``hydro.slender_drag_dq``); the drag's change with
+depth and the anchor's own drag are left out. The system is solved in O(N) by block elimination over the tree of
+lines (``physics/tree.py``), leaves first, the anchor's five unknowns (position, two tilt angles) at the root.
+The lines' contact with the anchor's body is not part of the static problem
+(``contact_model.without_line_anchor_contact``).
+
+The seabed contact is one-sided: K carries its stiffness for the nodes that are on the seabed at the end of the
+step, and G the gap a node must close before the seabed holds it (or the support it loses when it lifts off). The
+step is solved again while that prediction changes (``ACTIVE_SET_ROUNDS``): a line that lands on the seabed stops
+there, where the free line's stiffness would carry it metres into the seabed and the contact throw it back.
+
+A segment carries tension only when taut. A segment that has been slack for ``SLACK_PATIENCE`` iterations (and
+one slack in the first guess: excess line laid on the seabed) keeps only a small floor stiffness
+(``SLACK_STIFFNESS`` EA / l0, along and across it), so that folds and grounded slack move freely; one slack for a
+step or two, as a large step leaves many, keeps its EA in K, so that K stays far from singular.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from moor_env.physics import layout as L
+from moor_env.physics._jit import jit_step
+from moor_env.physics.environment import current_velocity
+from moor_env.physics.hydro import slender_drag_dq
+from moor_env.physics.linalg3 import inverse3
+from moor_env.physics.line import segment_axis
+from moor_env.physics.loads import compute_loads, set_constrained_nodes
+from moor_env.physics.tree import OR_EFF, OR_ORDER, TR_DEG, TR_NB, TR_SEG
+
+SLACK_STIFFNESS = 1e-6  # least stiffness of a segment in K, as a fraction of EA / l0 (keeps K regular)
+SLACK_PATIENCE = 3  # iterations a segment is slack before K lets it go
+ACTIVE_SET_ROUNDS = 8  # solves per step at most while the predicted seabed contacts change
+
+
+@jit_step
+def _basis(body_state, basis):
+    """Two unit vectors perpendicular to the anchor axis (the tilt unknowns rotate about them)."""
+    ex = body_state[L.BS_AXIS]
+    ey = body_state[L.BS_AXIS + 1]
+    ez = body_state[L.BS_AXIS + 2]
+    tx, ty, tz = (1.0, 0.0, 0.0) if abs(ex) < 0.9 else (0.0, 1.0, 0.0)
+    ux = ey * tz - ez * ty
+    uy = ez * tx - ex * tz
+    uz = ex * ty - ey * tx
+    norm = math.sqrt(ux * ux + uy * uy + uz * uz)
+    basis[0, 0] = ux / norm
+    basis[0, 1] = uy / norm
+    basis[0, 2] = uz / norm
+    basis[1, 0] = ey * basis[0, 2] - ez * basis[0, 1]
+    basis[1, 1] = ez * basis[0, 0] - ex * basis[0, 2]
+    basis[1, 2] = ex * basis[0, 1] - ey * basis[0, 0]
+
+
+@jit_step
+def residual(model, state, body_node, basis, res_body):
+    """Loads at the current state (velocities zero); returns (sum of squared scaled residuals, largest one) and
+    the anchor's five generalised residuals in ``res_body``.
+
+    A node's residual is scaled by its weight, the anchor's force by its weight and its moments by its weight
+    times its length.
+    """
+    set_constrained_nodes(model, state, 0.0)
+    compute_loads(model, state)
+    node_i = state.node_i
+    node_force = state.node_force
+    node_mass = state.node_mass
+    body_f = model.body_f
+    body_load = state.body_load
+    g = model.env_f[L.EF_G]
+    norm2 = 0.0
+    worst = 0.0
+    for n in range(node_i.shape[0]):
+        if node_i[n, L.NI_KIND] != L.NODE_FREE:
+            continue
+        scale = max(node_mass[n], 1e-6) * g
+        for c in range(3):
+            r = abs(node_force[n, c]) / scale
+            norm2 += r * r
+            if not (r <= worst):
+                worst = r
+    if body_node >= 0:
+        _basis(state.body_state, basis)
+        weight = body_f[L.BF_WEIGHT]
+        for c in range(3):
+            res_body[c] = body_load[c]
+        for k in range(2):
+            res_body[3 + k] = (body_load[3] * basis[k, 0] + body_load[4] * basis[k, 1]
+                               + body_load[5] * basis[k, 2])
+        for c in range(5):
+            r = abs(res_body[c]) / (weight if c < 3 else weight * body_f[L.BF_LENGTH])
+            norm2 += r * r
+            if not (r <= worst):
+                worst = r
+    return norm2, worst
+
+
+@jit_step
+def _add_block(dmat, n, sign, m):
+    """dmat[n] += sign * m (3x3)."""
+    for i in range(3):
+        for j in range(3):
+            dmat[n, i, j] += sign * m[i, j]
+
+
+@jit_step
+def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling, orow):
+    """Diagonal blocks D / tau^2 + K (``dmat``), the couplings of every segment's two ends (``coupling[s, 0]`` =
+    K_ab, ``coupling[s, 1]`` = K_ba) and the right-hand side F + G (``state.node_acc``); ``taut``: segments that K
+    holds taut, ``node_down``: nodes on the seabed at the end of the step."""
+    node_pos = state.node_pos
+    seg_i = state.seg_i
+    seg_f = state.seg_f
+    node_force = state.node_force
+    node_contact = state.node_contact
+    seg_tension = state.seg_tension
+    rhs = state.node_acc
+    mat_f = model.mat_f
+    env_f = model.env_f
+    nn = node_pos.shape[0]
+    dmat[:, :, :] = 0.0
+    for n in range(nn):
+        if orow[n, OR_EFF] == n and n != body_node:
+            m = max(state.node_mass[n], 1e-6) * inv_tau2
+            for c in range(3):
+                dmat[n, c, c] = m
+                rhs[n, c] = node_force[n, c]
+    if body_node >= 0:
+        for c in range(3):
+            rhs[body_node, c] = 0.0  # the anchor's own residual enters at the root
+    seabed = -env_f[L.EF_DEPTH]
+    kbot = env_f[L.EF_KBOT]
+    for n in range(nn):
+        e = orow[n, OR_EFF]
+        if e < 0 or e == body_node or node_contact[n] <= 0.0:
+            continue
+        k = kbot * node_contact[n]
+        penetration = seabed - node_pos[n, 2]
+        if node_down[n] == 1:
+            dmat[e, 2, 2] += k
+            if penetration < 0.0:
+                rhs[e, 2] += k * penetration  # the gap to close before the seabed holds the node
+        elif penetration > 0.0:
+            rhs[e, 2] -= k * penetration  # lifts off: the seabed lets go
+    smoothing = env_f[L.EF_SLACK_SMOOTHING]
+    rho = env_f[L.EF_RHO]
+    kmat = np.empty((3, 3))
+    dq = np.empty((3, 3))
+    for s in range(seg_i.shape[0]):
+        coupling[s, :, :, :] = 0.0
+        if seg_i[s, L.SI_ACTIVE] == 0:
+            continue
+        a = seg_i[s, L.SI_A]
+        b = seg_i[s, L.SI_B]
+        ea = orow[a, OR_EFF]
+        eb = orow[b, OR_EFF]
+        if ea == eb:
+            continue
+        mat = seg_i[s, L.SI_MAT]
+        ea_n = mat_f[mat, L.MF_EA]
+        l0 = seg_f[s, L.SF_L0]
+        length, qx, qy, qz = segment_axis(node_pos, a, b)
+        q = (qx, qy, qz)
+        strain = (length - l0) / l0
+        floor = SLACK_STIFFNESS * ea_n / l0
+        kt = seg_tension[s] / length if length > 0.0 else 0.0
+        if strain <= 0.0 and taut[s] == 1:
+            kq = ea_n / l0  # slack for a step or two only: K keeps it taut
+        else:  # the smoothed tension-only law's slope
+            kq = max(0.5 * ea_n * (1.0 + strain / math.sqrt(strain * strain + smoothing * smoothing)) / l0, floor)
+            if taut[s] == 0:
+                kt = max(kt, floor)
+        for i in range(3):
+            for j in range(3):
+                kmat[i, j] = (kq - kt) * q[i] * q[j] + (kt if i == j else 0.0)
+        if ea >= 0:
+            _add_block(dmat, ea, 1.0, kmat)
+        if eb >= 0:
+            _add_block(dmat, eb, 1.0, kmat)
+        _add_block(coupling[s], 0, -1.0, kmat)
+        _add_block(coupling[s], 1, -1.0, kmat)
+        # current drag turns with the segment: d f_end / d x_b = D_end P / length, d / d x_a = -D_end P / length
+        if env_f[L.EF_CUR_SCALE] == 0.0 or length <= 0.0:
+            continue
+        d = mat_f[mat, L.MF_D]
+        cn = 0.25 * rho * mat_f[mat, L.MF_CDN] * d * l0
+        ct = 0.25 * rho * mat_f[mat, L.MF_CDT] * math.pi * d * l0
+        for end in range(2):
+            node = a if end == 0 else b
+            ux, uy, uz = current_velocity(node_pos[node, 2], env_f, model.current_profile)
+            slender_drag_dq(ux, uy, uz, qx, qy, qz, cn, ct, dq)
+            for i in range(3):
+                for j in range(3):
+                    kmat[i, j] = (dq[i, j] - (dq[i, 0] * q[0] + dq[i, 1] * q[1] + dq[i, 2] * q[2]) * q[j]) / length
+            # K = -dF/dx: this end's row gets +D P / l from x_a and -D P / l from x_b
+            if end == 0:
+                if ea >= 0:
+                    _add_block(dmat, ea, 1.0, kmat)
+                _add_block(coupling[s], 0, -1.0, kmat)
+            else:
+                if eb >= 0:
+                    _add_block(dmat, eb, -1.0, kmat)
+                _add_block(coupling[s], 1, 1.0, kmat)
+
+
+@jit_step
+def _solve_body(inv_tau2, p, basis, res_body, body_state, node_f, node_force, body_f, smat, rho_p, dq):
+    """The anchor's five unknowns from the lines' impedance ``smat`` and right-hand side ``rho_p`` at node p.
+
+    (J^T S J + K_geo + D_b / tau^2) dq = R_b + J^T rho, with J the body node's motion per unknown (translation,
+    then rotation about basis[0] and basis[1]). Writes dq and returns the body node's motion J dq in ``rho_p``.
+    """
+    ex = body_state[L.BS_AXIS]
+    ey = body_state[L.BS_AXIS + 1]
+    ez = body_state[L.BS_AXIS + 2]
+    sp = node_f[p, L.NF_BODY_S]
+    jac = np.zeros((3, 5))
+    for c in range(3):
+        jac[c, c] = 1.0
+        jac[c, 3] = -sp * basis[1, c]  # s (u1 x e) = -s u2
+        jac[c, 4] = sp * basis[0, c]  # s (u2 x e) = s u1
+    a = jac.T @ smat @ jac
+    rhs = res_body + jac.T @ rho_p
+    geo = sp * (ex * node_force[p, 0] + ey * node_force[p, 1] + ez * node_force[p, 2])
+    geo += body_f[L.BF_S_BUOY] * body_f[L.BF_BUOYANCY] * ez
+    for c in range(3):
+        a[c, c] += body_f[L.BF_MASS_AXIAL] * inv_tau2
+    for c in range(3, 5):
+        a[c, c] += body_f[L.BF_M22] * inv_tau2 + geo
+    sol = np.linalg.solve(a, rhs)
+    dq[:] = sol
+    rho_p[:] = jac @ sol
+
+
+@jit_step
+def eliminate(inv_tau2, nq, body_node, basis, res_body, dq, model, state, dmat, coupling, tree, orow):
+    """Solve the assembled system in place: ``state.node_acc`` holds the right-hand side in and the step out (the
+    anchor's in ``dq``), by block elimination over the tree, leaves first (x_c = D_c^-1 (r_c - K_cp x_p) once the
+    parent p is known). The 3x3 products are written out: numpy's would allocate for every node."""
+    seg_i = state.seg_i
+    node_acc = state.node_acc
+    inv = np.empty((3, 3))
+    kpc_inv = np.empty((3, 3))
+    r = np.empty(3)
+    for k in range(nq):
+        c = orow[k, OR_ORDER]
+        inverse3(dmat[c], inv)
+        for i in range(3):
+            r[i] = inv[i, 0] * node_acc[c, 0] + inv[i, 1] * node_acc[c, 1] + inv[i, 2] * node_acc[c, 2]
+        for i in range(3):
+            node_acc[c, i] = r[i]
+            for j in range(3):
+                dmat[c, i, j] = inv[i, j]
+        if tree[c, TR_DEG] != -1:
+            continue
+        s = tree[c, TR_SEG]
+        p = tree[c, TR_NB]
+        cp = 0 if orow[seg_i[s, L.SI_A], OR_EFF] == c else 1  # coupling[s, cp] = K_cp, coupling[s, 1 - cp] = K_pc
+        pc = 1 - cp
+        for i in range(3):
+            for j in range(3):
+                kpc_inv[i, j] = (coupling[s, pc, i, 0] * inv[0, j] + coupling[s, pc, i, 1] * inv[1, j]
+                                 + coupling[s, pc, i, 2] * inv[2, j])
+        for i in range(3):
+            for j in range(3):
+                dmat[p, i, j] -= (kpc_inv[i, 0] * coupling[s, cp, 0, j] + kpc_inv[i, 1] * coupling[s, cp, 1, j]
+                                  + kpc_inv[i, 2] * coupling[s, cp, 2, j])
+            node_acc[p, i] -= (coupling[s, pc, i, 0] * node_acc[c, 0] + coupling[s, pc, i, 1] * node_acc[c, 1]
+                               + coupling[s, pc, i, 2] * node_acc[c, 2])
+    if body_node >= 0:
+        rho_p = node_acc[body_node].copy()
+        _solve_body(inv_tau2, body_node, basis, res_body, state.body_state, state.node_f, state.node_force,
+                    model.body_f, dmat[body_node], rho_p, dq)
+        node_acc[body_node, :] = rho_p
+    for k in range(nq - 1, -1, -1):
+        c = orow[k, OR_ORDER]
+        if tree[c, TR_DEG] != -1:
+            continue
+        s = tree[c, TR_SEG]
+        p = tree[c, TR_NB]
+        cp = 0 if orow[seg_i[s, L.SI_A], OR_EFF] == c else 1
+        for i in range(3):
+            r[i] = (coupling[s, cp, i, 0] * node_acc[p, 0] + coupling[s, cp, i, 1] * node_acc[p, 1]
+                    + coupling[s, cp, i, 2] * node_acc[p, 2])
+        for i in range(3):
+            node_acc[c, i] -= dmat[c, i, 0] * r[0] + dmat[c, i, 1] * r[1] + dmat[c, i, 2] * r[2]
+
+
+@jit_step
+def _predict_seabed(body_node, node_pos, node_contact, seabed, node_acc, node_down, orow, release):
+    """Update the nodes predicted on the seabed after the step in ``node_acc``; returns how many changed. With
+    ``release`` False a node on the seabed stays there (the set only grows: no cycling)."""
+    changed = 0
+    for n in range(node_pos.shape[0]):
+        e = orow[n, OR_EFF]
+        if e < 0 or e == body_node or node_contact[n] <= 0.0:
+            continue
+        down = 1 if node_pos[n, 2] + node_acc[e, 2] <= seabed else 0
+        if down != node_down[n] and (release or down == 1):
+            node_down[n] = down
+            changed += 1
+    return changed
+
+
+@jit_step
+def solve_step(inv_tau2, nq, body_node, basis, res_body, dq, model, state, scratch, tree, orow, seg_age):
+    """The step at the present state (its loads evaluated) into ``state.node_acc`` (free nodes) and ``dq`` (the
+    anchor), solved again while the contacts it predicts change; returns the number of solves. ``scratch``: the
+    arrays of :func:`new_scratch`."""
+    dmat, coupling, taut, node_down = scratch
+    node_pos = state.node_pos
+    seg_i = state.seg_i
+    seg_f = state.seg_f
+    seabed = -model.env_f[L.EF_DEPTH]
+    for s in range(seg_i.shape[0]):
+        length = segment_axis(node_pos, seg_i[s, L.SI_A], seg_i[s, L.SI_B])[0]
+        taut[s] = 1 if length > seg_f[s, L.SF_L0] or seg_age[s] < SLACK_PATIENCE else 0
+    for n in range(node_pos.shape[0]):
+        node_down[n] = 1 if node_pos[n, 2] <= seabed else 0
+    solves = 0
+    while True:
+        _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling, orow)
+        eliminate(inv_tau2, nq, body_node, basis, res_body, dq, model, state, dmat, coupling, tree, orow)
+        solves += 1
+        if solves >= ACTIVE_SET_ROUNDS or _predict_seabed(body_node, node_pos, state.node_contact, seabed,
+                                                          state.node_acc, node_down, orow, solves == 1) == 0:
+            return solves
+
+
+@jit_step
+def step_size(body_node, node_i, node_acc, dq, body_f):
+    """Largest node move of a step [m] (the anchor's rotation counted at its length)."""
+    biggest = 0.0
+    for n in range(node_i.shape[0]):
+        if node_i[n, L.NI_KIND] == L.NODE_FREE:
+            move = math.sqrt(node_acc[n, 0] ** 2 + node_acc[n, 1] ** 2 + node_acc[n, 2] ** 2)
+            if not (move <= biggest):
+                biggest = move
+    if body_node >= 0:
+        move = max(math.sqrt(dq[0] ** 2 + dq[1] ** 2 + dq[2] ** 2),
+                   math.sqrt(dq[3] ** 2 + dq[4] ** 2) * body_f[L.BF_LENGTH])
+        if not (move <= biggest):
+            biggest = move
+    return biggest
+
+
+@jit_step
+def count_slack(node_pos, seg_i, seg_f, seg_age):
+    """Count the iterations each segment has been slack (0 while taut)."""
+    for s in range(seg_i.shape[0]):
+        if seg_i[s, L.SI_ACTIVE] == 0:
+            continue
+        length = segment_axis(node_pos, seg_i[s, L.SI_A], seg_i[s, L.SI_B])[0]
+        seg_age[s] = seg_age[s] + 1.0 if length < seg_f[s, L.SF_L0] else 0.0
+
+
+@jit_step
+def new_scratch(n_nodes, n_segs):
+    """Scratch arrays of :func:`solve_step`: diagonal blocks, segment couplings, segments K holds taut, nodes on the
+    seabed after the step."""
+    return (np.zeros((n_nodes, 3, 3)), np.zeros((n_segs, 2, 3, 3)), np.zeros(n_segs, np.int64),
+            np.zeros(n_nodes, np.int64))
