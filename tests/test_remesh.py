@@ -13,7 +13,10 @@ from moor_env.simulation import Simulator, run_drop, solve_statics
 
 # gjoa-500 at 120 m spacing: the loop tightens in the fall, so `fast` fits its tight_line resolution there
 # (the speed-vs-error study measured the coarse one 4-9 % slow at 85-120 m, the fine one within 0.05 %)
-TIGHT_SCENE = {"fidelity": "fast", "vessel_spacing_m": 120.0}
+# The line-anchor contact is off: with it, this fall's vertical chain lands on the anchor and snaps taut at a
+# moment that a 0.06 mm change of the static state moves (touchdown 25.3 or 26.3 m/s), which says nothing of the
+# state transfer this file checks.
+TIGHT_SCENE = {"fidelity": "fast", "vessel_spacing_m": 120.0, "discretization.line_anchor_contact": "off"}
 COARSE = {**TIGHT_SCENE, "discretization.fit_to_geometry": False}
 
 
@@ -89,18 +92,17 @@ def test_coarse_to_fine_conserves_every_material_length_and_keeps_the_shape(coar
 
 def test_fall_from_a_remeshed_state_matches_the_fine_run(coarse_static, fine_model):
     """Reference: the same scene solved and dropped on the fine resolution throughout. The remeshed run (coarse
-    equilibrium, fine fall) is within 0.5 % in touchdown speed (measured 0.18 %: 25.29 against 25.34 m/s, both
-    within 0.9 % of the explicit fall's 25.12 m/s) and 0.25 deg in tilt (measured 0.63 against 0.79 deg; explicit
-    0.49 deg); the coarse run throughout misses by more than 2 % (measured 8 %: what the fit at the release is
-    for)."""
+    equilibrium, fine fall) is within 0.1 % in touchdown speed (measured 0.002 %: 26.3203 against 26.3197 m/s)
+    and 0.1 deg in tilt (both 0.00 deg); the coarse run throughout misses by more than 2 % (what the fit at the
+    release is for)."""
     reference = run_drop(solve_statics(fine_model).simulator, history=False)
     sim = Simulator(fine_model)
     sim.state = remesh_state(coarse_static.simulator.state, coarse_static.simulator.model, fine_model)
     remeshed = run_drop(sim, history=False)
     coarse = run_drop(solve_statics(coarse_static.simulator.model).simulator, history=False)
     assert remeshed.status == reference.status == "touchdown"
-    assert remeshed.touchdown_speed_m_s == pytest.approx(reference.touchdown_speed_m_s, rel=0.005)
-    assert remeshed.tilt_deg == pytest.approx(reference.tilt_deg, abs=0.25)
+    assert remeshed.touchdown_speed_m_s == pytest.approx(reference.touchdown_speed_m_s, rel=0.001)
+    assert remeshed.tilt_deg == pytest.approx(reference.tilt_deg, abs=0.1)
     assert abs(coarse.touchdown_speed_m_s / reference.touchdown_speed_m_s - 1.0) > 0.02
 
 
