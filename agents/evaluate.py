@@ -56,7 +56,7 @@ from tqdm import tqdm
 
 import moor_env  # noqa: F401 - registers the envs
 from agents.baselines import BASELINES, PLAN_ENV, PLAN_V1_ENV, RELEASE_ENV, is_plan_env, is_plan_v1, make_baseline
-from agents.bundled import resolve_target
+from agents.bundle import resolve_target
 from agents.config import load_train_config
 from agents.policy import EpisodeContext, Policy
 from agents.report import markdown_table, save_figure, write_records, write_report
@@ -297,10 +297,11 @@ def render_episode(policy: Policy, scenario: dict[str, Any], path: str | Path, e
     env.close()
     env = gym.make(env_id, config=cfg, render_mode="rgb_array")
     record = run_episode(env, policy, scenario, env_id, cfg)
-    fall = env.unwrapped.fall_frames()
+    count = env.unwrapped.fall_frame_count()
+    fall = env.unwrapped.fall_frames([count // 2, count - 1]) if count else []
     # AnchorPlan-v1 simulates nothing before its action: its first frame shows the site
     titles = ["site" if is_plan_v1(env_id) else "hanging", "falling", "touchdown"]
-    frames = first + ([fall[len(fall) // 2], fall[-1]] if fall else [env.render()])
+    frames = first + (fall if fall else [env.render()])
     titles = titles[: len(frames)]
     fig, axes = plt.subplots(1, len(frames), figsize=(5.5 * len(frames), 4))
     for ax, frame, title in zip(np.atleast_1d(axes), frames, titles, strict=True):

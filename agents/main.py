@@ -4,7 +4,7 @@ print the table and the statistics.
     python -m agents.main --config configs/agents/quick.yaml [--set key=value ...] [--n-scenarios 50] [--jobs 2]
 
 Trains every seed of the config (resuming a run that exists, so a second call only evaluates), then evaluates the
-bundled policy trained for the same env (:mod:`agents.bundled`, ``--bundled``), the preset just trained, the crew
+bundled policy trained for the same env (:mod:`agents.bundle`, ``--bundled``), the preset just trained, the crew
 rule of thumb, random actions and (on the plan envs) the per-scenario optimiser on the env's held-out set
 (:func:`agents.evaluate.default_scenarios`: on ``AnchorPlan-v1`` sites the training never draws; 50 of them, so
 that one scenario is 2 points of success). Prints the table and the statistics (:mod:`agents.statistics`: Wilson
@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 
 from agents.baselines import is_plan_env
-from agents.bundled import bundled_path
+from agents.bundle import bundled_path
 from agents.config import load_train_config, parse_set
 from agents.evaluate import default_scenarios, evaluate_targets, render_episode
 from agents.report import markdown_table, write_records, write_report

@@ -242,7 +242,7 @@ class AnchorPlanV1Env(PlanFrames, gym.Env):
             return self._draw(snapshot(self.core))
         site, m = self.site, self.measures
         lines = [f"depth          {site['water_depth_m']:7.1f} m",
-                 f"current        {site['current_scale']:7.2f} x profile at {site['current_direction_deg']:.0f} deg",
+                 f"current        {site['current_scale']:7.2f} x, to {site['current_direction_deg']:.0f} deg",
                  f"Hs, Tp         {site['sea_state_hs_m']:7.2f} m, {site['sea_state_tp_s']:.1f} s",
                  f"anchor mass    {site['anchor_mass_scale']:7.3f} x nominal",
                  f"soil R         {m['soil_resistance_j_m3'] / 1e3:7.2f} kJ/m^3",

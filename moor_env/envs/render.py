@@ -106,7 +106,7 @@ class FrameRenderer:
         ax.axhline(0.0, color="#2a6fb0", lw=0.8, zorder=1)
         ax.set_ylabel("z [m]", fontsize=8)
         ax.tick_params(labelsize=7)
-        fig.text(0.52, 0.88, "\n".join(lines), va="top", fontsize=9, family="monospace")
+        fig.text(0.52, 0.88, "\n".join(lines), va="top", fontsize=8, family="monospace")
         fig.suptitle("site (nothing simulated before the plan)", fontsize=9)
         self.canvas.draw()
         return np.asarray(self.canvas.buffer_rgba())[:, :, :3].copy()

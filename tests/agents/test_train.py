@@ -115,3 +115,39 @@ def test_main_job_trains_evaluates_and_prints_the_table(tmp_path, tiny_cfg, tiny
     report = tmp_path / "runs" / "t" / "evaluation"
     assert {"evaluation.json", "evaluation.md", "distributions.png", "episode.png"} <= {p.name for p in
                                                                                         report.iterdir()}
+
+
+def test_main_job_on_plan_v1_shows_the_bundled_policy(tmp_path, capsys):
+    """AnchorPlan-v1: the preset beside the bundled policy and the three baselines, with the statistics."""
+    from agents.main import main
+    from agents.scenarios import held_out_sites, save_scenarios
+
+    save_scenarios(held_out_sites(2), tmp_path / "s.json")
+    cfg = tiny_train_config(tmp_path / "runs", total_timesteps=8, hyperparams={"learning_starts": 4,
+                                                                              "batch_size": 4, "buffer_size": 100})
+    cfg["env"] = {"id": "moor_env/AnchorPlan-v1", "config": "anchor-plan", "overrides": {}}
+    cfg["eval"] = {"freq_steps": 8, "episodes": 1}
+    (tmp_path / "t.yaml").write_text(yaml.safe_dump(cfg))
+    args = ["--config", str(tmp_path / "t.yaml"), "--scenarios", str(tmp_path / "s.json"), "--jobs", "1",
+            "--population", "2", "--iterations", "1"]
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    for row in ("| plan-v1-sac | AnchorPlan-v1 |", "| t | AnchorPlan-v1 |", "| crew |", "| random |", "| optimiser |"):
+        assert row in out
+    assert "Task check" in out and "plan-v1-sac beats crew" in out
+    records = json.loads((tmp_path / "runs" / "t" / "evaluation" / "rl_evaluation.json").read_text())
+    assert {r["policy"] for r in records["episodes"]} == {"plan-v1-sac", "t", "crew", "random", "optimiser"}
+    assert all(r["required_speed_m_s"] > 15.0 for r in records["episodes"])
+
+
+def test_bundled_policy_loads_by_name_and_acts_on_five_levers():
+    from agents.bundle import bundled_names, bundled_path
+    from agents.train_rllib import load_run_policies
+
+    assert "plan-v1-sac" in bundled_names()
+    meta = json.loads((bundled_path("plan-v1-sac") / "meta.json").read_text())
+    assert meta["reproduce"] and meta["status"] == "finished"
+    (policy,) = load_run_policies(bundled_path("plan-v1-sac"))
+    assert policy.env_id == "moor_env/AnchorPlan-v1"
+    a = policy.act(np.zeros(9, np.float32), {})
+    assert a.shape == (5,) and (np.abs(a) <= 1.0).all()
