@@ -845,7 +845,11 @@ def markdown(out: dict[str, Any]) -> str:
           "Element lengths are written vertical chain / loop chain / fibre / wire [m] (near to far from the "
           "anchor). MoorDyn runs RK4 with line damping off (see `moor_env/crosscheck/moordyn.py`), with "
           "dt as a fraction of its RK4 limit 2.83/omega_max; the `current-waves` scene is not supported by the "
-          "MoorDyn bridge (no current, waves or pre-release phase), so it has no MoorDyn front.", ""]
+          "MoorDyn bridge (no current, waves or pre-release phase), so it has no MoorDyn front. Ours runs each "
+          "scene's line-anchor contact as its `discretization.line_anchor_contact: auto` sets it (on in every "
+          "scene here: their chain catches up with the anchor), MoorDyn has none. Both start from the equilibrium "
+          "as solved, whose vertical chain hangs exactly on the anchor's axis: where that chain catches up, a "
+          "disturbance of it changes the landing (see [fall-accuracy.md](fall-accuracy.md)).", ""]
     L += findings(out)
     # references
     L += ["## References and their convergence", "",
