@@ -3,8 +3,9 @@ every unknown and the right-hand sides h F - h^2 K v, for the step's active set.
 
 Linearised here: the axial spring-damper of every active segment (with its geometric stiffness), the line drag
 per half segment (its exact 3x3 velocity Jacobian, skipped where the drag is far from stiff on the step's scale),
-the point masses' drag, and the seabed contact with its regularised friction. A segment leaving the active set
-contributes the removal of its start-of-step tension.
+the point masses' drag and the seabed contact with its regularised friction (the derivatives beside their laws:
+``hydro.add_slender_drag_dv``, ``point_loads.add_point_loads_dv``, ``seabed.add_seabed_dv``). A segment leaving
+the active set contributes the removal of its start-of-step tension.
 """
 
 from __future__ import annotations
@@ -16,11 +17,6 @@ from moor_env.physics.environment import current_velocity
 from moor_env.physics.hydro import add_slender_added_mass, add_slender_drag_dv
 from moor_env.physics.implicit_active_set import chord_point, is_active
 from moor_env.physics.layout import (
-    EF_CBOT,
-    EF_DEPTH,
-    EF_FRIC_V,
-    EF_KBOT,
-    EF_MU,
     EF_RHO,
     MF_CAN,
     MF_CAT,
@@ -30,9 +26,6 @@ from moor_env.physics.layout import (
     MF_EA,
     MF_MASS,
     MF_ZETA,
-    NF_POINT_CA,
-    NF_POINT_CDA,
-    NF_POINT_VOLUME,
     SF_L0,
     SI_A,
     SI_ACTIVE,
@@ -40,6 +33,8 @@ from moor_env.physics.layout import (
     SI_MAT,
 )
 from moor_env.physics.line import segment_axis
+from moor_env.physics.point_loads import add_point_loads_dv
+from moor_env.physics.seabed import add_seabed_dv
 from moor_env.physics.tree import OR_EFF, add_sym
 
 DRAG_SKIP = 0.02  # drag of a half segment is linearised only where h * (its damping rate) exceeds this
@@ -59,7 +54,6 @@ def assemble(h, first, body_node, model, state, orow):
     seg_chord = state.seg_chord
     nn = node_i.shape[0]
     rho = env_f[EF_RHO]
-    depth = env_f[EF_DEPTH]
     for n in range(nn):
         if orow[n, OR_EFF] != n:
             continue
@@ -77,54 +71,14 @@ def assemble(h, first, body_node, model, state, orow):
         node_mm[n, 2] += node_mass[n]
         for c in range(3):
             node_acc[n, c] = h * node_force[n, c]
-    # point loads: added mass, point-mass drag, seabed contact and friction
-    kbot = env_f[EF_KBOT]
-    cbot = env_f[EF_CBOT]
-    mu = env_f[EF_MU]
-    fric_v = env_f[EF_FRIC_V]
+    # point loads (added mass, drag) and the seabed, linearised by their laws' own derivatives
     for n in range(nn):
         e = orow[n, OR_EFF]
         if e < 0 or e == body_node:
             continue
-        if not first:
-            ma = rho * node_f[n, NF_POINT_VOLUME] * node_f[n, NF_POINT_CA]
-            node_mm[e, 0] += ma
-            node_mm[e, 1] += ma
-            node_mm[e, 2] += ma
-        cda = node_f[n, NF_POINT_CDA]
-        if cda > 0.0:
-            ux, uy, uz = current_velocity(node_pos[n, 2], env_f, current_profile)
-            rx = ux - node_vel[n, 0]
-            ry = uy - node_vel[n, 1]
-            rz = uz - node_vel[n, 2]
-            vr = math.sqrt(rx * rx + ry * ry + rz * rz)
-            if vr > 0.0:
-                k = h * 0.5 * rho * cda
-                kv = k / vr
-                add_sym(node_mm, e, k * vr + kv * rx * rx, k * vr + kv * ry * ry, k * vr + kv * rz * rz,
-                         kv * rx * ry, kv * rx * rz, kv * ry * rz)
-        area = node_contact[n]
-        penetration = -depth - node_pos[n, 2]
-        if penetration > 0.0 and area > 0.0:
-            vx = node_vel[n, 0]
-            vy = node_vel[n, 1]
-            vz = node_vel[n, 2]
-            fz = (kbot * penetration - cbot * vz) * area
-            if fz > 0.0:
-                node_mm[e, 2] += h * cbot * area + h * h * kbot * area
-                node_acc[e, 2] -= h * h * kbot * area * vz
-                vh = math.sqrt(vx * vx + vy * vy)
-                if vh < fric_v:
-                    cf = h * mu * fz / fric_v
-                    node_mm[e, 0] += cf
-                    node_mm[e, 1] += cf
-                else:
-                    cf = h * mu * fz / vh
-                    ex = vx / vh
-                    ey = vy / vh
-                    node_mm[e, 0] += cf * (1.0 - ex * ex)
-                    node_mm[e, 1] += cf * (1.0 - ey * ey)
-                    node_mm[e, 3] -= cf * ex * ey
+        add_point_loads_dv(node_mm, e, n, h, not first, node_f, node_pos, node_vel, env_f, current_profile)
+        add_seabed_dv(node_mm, node_acc, e, h, node_pos[n, 2], node_vel[n, 0], node_vel[n, 1], node_vel[n, 2],
+                      node_contact[n], env_f)
     # segments: added mass (rebuild), drag Jacobians, axial spring-damper of the active set
     for s in range(seg_i.shape[0]):
         if seg_i[s, SI_ACTIVE] == 0:

@@ -1,8 +1,8 @@
 """The loads of a state: every force on the line nodes and the anchor, and the nodes the state prescribes.
 
-:func:`compute_loads` calls each force law once (line segments ``line.segment_loads``, point masses, seabed
-``seabed.seabed_force``, the anchor ``anchor.body_loads``, the lines' contact with the anchor
-``contact.add_contact_loads``) for every integrator and the statics; a new force is a
+:func:`compute_loads` calls each force law once (line segments ``line.segment_loads``, point masses
+``point_loads.add_point_loads``, seabed ``seabed.seabed_force``, the anchor ``anchor.body_loads``, the lines'
+contact with the anchor ``contact.add_contact_loads``) for every integrator and the statics; a new force is a
 law in its own module, called here, with its parameters in the model record and any state it carries in the state
 record (``physics/records.py``). :func:`set_constrained_nodes` places the nodes held by a vessel, the anchor or a
 parent node; :func:`compute_accelerations` adds the explicit integrators' solve for the free nodes.
@@ -10,24 +10,15 @@ parent node; :func:`compute_accelerations` adds the explicit integrators' solve 
 
 from __future__ import annotations
 
-import math
-
 from moor_env.physics._jit import jit_no_refcount
 from moor_env.physics.anchor import add_point_load, body_acceleration, body_loads, body_point
 from moor_env.physics.contact import add_contact_loads
-from moor_env.physics.environment import current_velocity
 from moor_env.physics.layout import (
     BF_ACTIVE,
     CF_ON,
     EF_DEPTH,
-    EF_G,
-    EF_RHO,
     EF_SEABED_SMOOTHING,
     NF_BODY_S,
-    NF_POINT_CA,
-    NF_POINT_CDA,
-    NF_POINT_MASS,
-    NF_POINT_VOLUME,
     NI_KIND,
     NI_REF,
     NODE_BODY,
@@ -37,6 +28,7 @@ from moor_env.physics.layout import (
 )
 from moor_env.physics.linalg3 import solve_sym3
 from moor_env.physics.line import segment_loads
+from moor_env.physics.point_loads import add_point_loads
 from moor_env.physics.seabed import seabed_force
 from moor_env.physics.vessels import track_state
 
@@ -114,8 +106,6 @@ def compute_loads(model, state):
     node_vel, body_state, node_i = state.node_vel, state.body_state, state.node_i
     node_f, node_force, node_mm = state.node_f, state.node_force, state.node_mm
     node_mass, node_contact, body_load = state.node_mass, state.node_contact, state.body_load
-    rho = env_f[EF_RHO]
-    g = env_f[EF_G]
     nn = node_i.shape[0]
     for n in range(nn):
         for c in range(3):
@@ -131,25 +121,7 @@ def compute_loads(model, state):
         kind = node_i[n, NI_KIND]
         if kind != NODE_FREE and kind != NODE_WELDED:
             continue
-        pm = node_f[n, NF_POINT_MASS]
-        vol = node_f[n, NF_POINT_VOLUME]
-        if pm > 0.0 or vol > 0.0:
-            node_mass[n] += pm
-            node_force[n, 2] -= (pm - rho * vol) * g
-            ma = rho * vol * node_f[n, NF_POINT_CA]
-            node_mm[n, 0] += ma
-            node_mm[n, 1] += ma
-            node_mm[n, 2] += ma
-            cda = node_f[n, NF_POINT_CDA]
-            if cda > 0.0:
-                ux, uy, uz = current_velocity(node_pos[n, 2], env_f, current_profile)
-                rx = ux - node_vel[n, 0]
-                ry = uy - node_vel[n, 1]
-                rz = uz - node_vel[n, 2]
-                k = 0.5 * rho * cda * math.sqrt(rx * rx + ry * ry + rz * rz)
-                node_force[n, 0] += k * rx
-                node_force[n, 1] += k * ry
-                node_force[n, 2] += k * rz
+        add_point_loads(n, node_f, node_pos, node_vel, env_f, current_profile, node_force, node_mm, node_mass)
         if node_pos[n, 2] < -env_f[EF_DEPTH] or env_f[EF_SEABED_SMOOTHING] > 0.0:
             fx, fy, fz = seabed_force(node_pos[n, 2], node_vel[n, 0], node_vel[n, 1], node_vel[n, 2],
                                       node_contact[n], env_f)
