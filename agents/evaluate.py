@@ -21,8 +21,8 @@ Command line::
 A result (``evaluate_policy``) is a dict: ``policy``, ``env_id``, ``episodes`` (one record per scenario:
 ``touchdown_speed_m_s``, ``tilt_deg``, ``reward``, ``success``, ``limits_exceeded``, ``sim_status``,
 ``chain_past_back_end_m`` ...) and ``summary`` (:func:`summarize`; ``chain_inside``: touchdowns whose vertical
-chain had fallen past the anchor's back end, which the model has no contact to stop, so that their speed and tilt
-rest on an unmodelled part of the fall: README "Accuracy of the fall"). Several results of one policy trained with
+chain ended past the anchor's back end; the line-anchor contact keeps the chain out, so it counts touchdowns where
+that contact was switched off or failed: docs/fall-accuracy.md). Several results of one policy trained with
 different seeds combine with :func:`combine_seeds` (t-interval over the seeds' means; each pooled episode keeps
 its ``run``).
 

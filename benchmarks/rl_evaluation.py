@@ -1,0 +1,170 @@
+"""AnchorPlan-v1: the trained policies against the crew, random plans and the per-scenario optimiser.
+
+Run from the repository root after training the full preset (``python -m agents.train --config
+configs/agents/full.yaml``, five seeds under ``runs/full``)::
+
+    python benchmarks/rl_evaluation.py [--run runs/full] [--sites 500] [--jobs 2]
+
+Every policy plays the same held-out sites (:func:`agents.scenarios.held_out_sites`: drawn from the env's site
+distribution with seeds that training never uses). The trained run counts each of its seeds as one run (IQM over
+the seeds with a stratified bootstrap interval); the bundled policy (``plan-v1-sac``, one seed of that run) is
+evaluated on its own, as the main job shows it. Writes the per-episode records and the statistics to
+``benchmarks/results/rl_evaluation.json`` (:func:`agents.report.write_records`), the learning curves and the
+speed/tilt distributions to ``docs/``, and the table in ``docs/agents-results.md`` and the README's headline
+(``--docs-only``: only the text, from the committed JSON).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from _docs import DOCS, load_result, write_blocks  # noqa: E402
+from _machine import run_record  # noqa: E402
+
+from agents.curves import baseline_levels, learning_curves, plot_learning_curves  # noqa: E402
+from agents.evaluate import PLAN_V1_CONFIG, evaluate_targets  # noqa: E402
+from agents.report import markdown_table, plot_distributions, write_records  # noqa: E402
+from agents.runs import run_dirs  # noqa: E402
+from agents.scenarios import held_out_sites  # noqa: E402
+from agents.statistics import evaluation_statistics, format_statistics  # noqa: E402
+from moor_env.errors import ConfigError  # noqa: E402
+
+RESULTS_STEM = "rl_evaluation"
+RESULTS = ROOT / "benchmarks" / "results" / f"{RESULTS_STEM}.json"
+DOC = DOCS / "agents-results.md"
+README = ROOT / "README.md"
+COMMAND = "python benchmarks/rl_evaluation.py"
+BUNDLED = "plan-v1-sac"
+BASELINES = ("crew", "random", "optimiser")
+OPTIMISER = {"population": 8, "iterations": 3, "elite": 3}
+
+
+def _run_meta(run: Path) -> list[dict]:
+    """What each seed of the trained run was: seed, env steps, training wall time, source commit."""
+    import json  # noqa: PLC0415 - only here
+
+    out = []
+    for d in run_dirs(run):
+        meta = json.loads((Path(d) / "meta.json").read_text())
+        out.append({k: meta.get(k) for k in ("seed", "timesteps", "train_wall_s", "git_commit")})
+    return out
+
+
+def _source_commit() -> str | None:
+    """The commit of the evaluated code, None outside a git checkout (``+dirty`` where files differ from it)."""
+    import subprocess  # noqa: PLC0415 - only here
+
+    try:
+        head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True, check=True)
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT,
+                               capture_output=True, text=True, check=True)
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    return head.stdout.strip() + ("+dirty" if dirty.stdout.strip() else "")
+
+
+def evaluate(run: Path, sites: int, jobs: int, progress: bool = True) -> dict:
+    """Evaluate the run, the bundled policy and the baselines on ``sites`` held-out sites; the records."""
+    load_before = os.getloadavg()[0]
+    scenarios = held_out_sites(sites)
+    targets = [str(run), BUNDLED, *BASELINES]
+    t0 = time.perf_counter()
+    results = evaluate_targets(targets, scenarios, None, PLAN_V1_CONFIG, jobs, progress, OPTIMISER)
+    stats = evaluation_statistics(results)
+    summaries = [{k: r[k] for k in ("policy", "env_id", "summary", "wall_s")} for r in results]
+    meta = {**run_record(load_before), "source_commit": _source_commit(), "command": COMMAND, "sites": sites, "jobs": jobs, "optimiser": OPTIMISER,
+            "wall_s": time.perf_counter() - t0, "trained_run": {"name": run.name, "seeds": _run_meta(run)},
+            "summaries": summaries}
+    write_records(results, RESULTS, stats, meta)
+    plot_distributions(results, DOCS / "agents-distributions.png")
+    return {"results": results, "statistics": stats}
+
+
+def plot_curves(run: Path, jobs: int) -> Path:
+    """Success against env steps of every seed of the run, the crew and the optimiser as levels on the same
+    evaluation episodes."""
+    levels = baseline_levels(["crew", "optimiser"], run, jobs)
+    return plot_learning_curves({"SAC": learning_curves(run)}, levels, DOCS / "agents-learning-curves.png")
+
+
+def _pct(x: float) -> str:
+    return f"{100.0 * x:.0f} %"
+
+
+def headline(data: dict) -> str:
+    """The README's RL line: the trained run's IQM, the crew, the paired difference, the optimiser."""
+    meta, stats = data["meta"], data["statistics"]
+    run = meta["trained_run"]["name"]
+    seeds = stats["seeds"][run]
+    success = stats["success"]
+    diff = next(c for c in stats["paired"] if c["a"] == run and c["b"] == "crew")
+    return (f"**RL** (AnchorPlan-v1, {meta['sites']} held-out sites, every policy on the same ones): SAC trained "
+            f"with {seeds['runs']} seeds succeeds on {_pct(seeds['iqm'])} (IQM, 95 % interval "
+            f"[{100 * seeds['ci'][0]:.0f}, {100 * seeds['ci'][1]:.0f}] %), the crew's rule of thumb on "
+            f"{_pct(success['crew']['rate'])}, random plans on {_pct(success['random']['rate'])}, the per-site "
+            f"optimiser on {_pct(success['optimiser']['rate'])}; trained minus crew {100 * diff['difference']:+.1f} "
+            f"points (paired 95 % interval [{100 * diff['ci'][0]:+.1f}, {100 * diff['ci'][1]:+.1f}]). "
+            f"`{COMMAND}`, run {meta['date'][:10]}: [docs/agents-results.md](docs/agents-results.md).")
+
+
+def results_block(data: dict) -> str:
+    """The table and the statistics for ``docs/agents-results.md``."""
+    meta = data["meta"]
+    seeds = ", ".join(f"seed {s['seed']} {s['timesteps']} steps" for s in meta["trained_run"]["seeds"])
+    load = meta["load_average_1min"]
+    opt = meta["optimiser"]
+    lines = [f"`{COMMAND}`, run {meta['date'][:19].replace('T', ' ')} UTC on {meta['machine']} (1-min load average "
+             f"{load['before']:.1f} -> {load['after']:.1f}), {meta['sites']} held-out sites, {meta['jobs']} "
+             f"workers, {meta['wall_s'] / 60:.0f} min. `{meta['trained_run']['name']}`: {seeds}; "
+             f"`{BUNDLED}`: its bundled seed; optimiser: {opt['population']} candidates x {opt['iterations']} "
+             f"cross-entropy iterations per site.", "", markdown_table(meta["summaries"]).rstrip("\n"), "",
+             "```text", format_statistics(data["statistics"]).rstrip("\n"), "```"]
+    return "\n".join(lines)
+
+
+def docs_blocks(data: dict | None) -> list[tuple[Path, str, str]]:
+    """The blocks this benchmark writes, rendered from its results JSON."""
+    if data is None:
+        return []
+    return [(DOC, RESULTS_STEM, results_block(data)), (README, f"headline-{RESULTS_STEM}", headline(data))]
+
+
+def docs_from_results() -> list[tuple[Path, str, str]]:
+    """:func:`docs_blocks` of the committed ``benchmarks/results/rl_evaluation.json``."""
+    return docs_blocks(load_result(RESULTS_STEM))
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Evaluate, write the JSON, the figures and the docs text."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--run", default="runs/full", help="the trained run (a folder of seed-* runs)")
+    parser.add_argument("--sites", type=int, default=500, help="held-out sites")
+    parser.add_argument("--jobs", type=int, default=2, help="worker processes")
+    parser.add_argument("--no-progress", action="store_true")
+    parser.add_argument("--docs-only", action="store_true",
+                        help=f"rewrite the docs text from {RESULTS.relative_to(ROOT)}, run nothing")
+    args = parser.parse_args(argv)
+    if not args.docs_only:
+        run = Path(args.run)
+        try:
+            run_dirs(run)
+        except ConfigError as exc:
+            print(f"error: {exc} (train it: python -m agents.train --config configs/agents/full.yaml)",
+                  file=sys.stderr)
+            return 2
+        evaluate(run, args.sites, args.jobs, not args.no_progress)
+        plot_curves(run, args.jobs)
+    write_blocks(docs_from_results())
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
