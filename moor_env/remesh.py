@@ -40,10 +40,9 @@ def remesh_state(state: SimState, source: Model, target: Model) -> SimState:
     """
     if list(source.lines) != list(target.lines) or source.material_names != target.material_names:
         raise ValueError("remesh needs two compiles of one scene: lines or materials differ")
-    out = SimState(node_pos=target.node_pos0.copy(), node_vel=np.zeros_like(target.node_pos0),
-                   body_state=state.body_state.copy(), node_i=target.node_i.copy(), node_f=target.node_f.copy(),
-                   seg_i=target.seg_i.copy(), seg_f=target.seg_f.copy(), line_i=target.line_i.copy(),
-                   line_f=target.line_f.copy(), t=state.t, released=state.released)
+    out = target.initial_state()
+    out.body_state[:] = state.body_state
+    out.t, out.released = state.t, state.released
     for name, info in source.lines.items():
         _copy_ends(state, info.index, out, target.lines[name].index)
     for name, info in source.lines.items():
