@@ -354,7 +354,8 @@ def run_ours(spec: dict[str, Any], ov: dict[str, Any]) -> dict[str, Any]:
 
 def run_md(spec: dict[str, Any], case: dict[str, Any], ref_cfg: SceneConfig) -> dict[str, Any]:
     """One MoorDyn run (best of 3 when fast) at chain segment c and dt = fraction x RK4 limit."""
-    from moor_env.crosscheck.moordyn import build_moordyn_input, omega_dt_limit, run_moordyn_drop
+    from moor_env.crosscheck.moordyn import build_moordyn_input, run_moordyn_drop
+    from moor_env.crosscheck.moordyn_input import omega_dt_limit
 
     out: dict[str, Any] = {"code": "moordyn", "chain_m": case["chain_m"], "fraction": case["fraction"]}
     static = statics_for(ref_cfg)  # our equilibrium at the same segments: MoorDyn starts exactly from it
