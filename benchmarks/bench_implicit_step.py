@@ -14,7 +14,7 @@ Four cases of gjoa-500 with implicit lines on meshes set explicitly (the ``fast`
 ``tight_line`` keys), each from its static equilibrium:
 
 - ``hanging_waves``: a pre-release phase: waves (Hs 2 m, Tp 9 s, ramped in), 79 s of hanging
-  at a 0.1 s implicit step (the env's ``control.pre_release_dt_s`` when the case was set up; now 0.2 s);
+  at a 0.1 s implicit step (AnchorRelease-v0's ``control.pre_release_dt_s`` is 0.2 s);
 - ``fall_fast``: release and fall to touchdown at the model's own step on the coarse ``fast`` mesh;
 - ``fall_fine``: the same on the fine ``tight_line`` mesh (1 m / 0.5 m chain, 50 m fibre, 100 m wire);
 - ``fall_fast_after_waves``: the fall on the coarse mesh after the ``hanging_waves`` phase (which is not timed

@@ -96,9 +96,9 @@ class ControlConfig(_Strict):
                     "vessels and the winch [s]; null: pre_release_dt_s")
     fall_dt_scale: float = Field(
         1.0, gt=0.0, le=1.0,
-        description="the fall's integration step as a fraction of the scene's (or fall integrator's) step; the "
-                    "implicit step's linearisation of a segment that turns while it goes taut puts spurious peaks "
-                    "into the tension limits, which half the step removes (docs/mbl-exceedance.md)")
+        description="the fall's integration step as a fraction of the scene's (or fall integrator's) step; a "
+                    "segment that goes from slack to taut while it turns within one implicit step can end it "
+                    "stretched, and a smaller step lowers that peak in the tension limits (docs/mbl-exceedance.md)")
     spacing_rate_max_m_s: float = Field(0.5, gt=0.0, le=2.0,
                                         description="second vessel's largest horizontal speed (DP slow move) [m/s]")
     spacing_accel_max_m_s2: float = Field(0.05, gt=0.0, le=1.0,

@@ -25,13 +25,14 @@ segment snapping taut within a step is an inelastic event. Linearised (implicit)
   ``TURN_TOLERANCE`` (strain) is linearised again at that chord and the step solved again, one more Newton
   iteration on its spring: the turn would otherwise stretch it by about (h v_perp)^2 / (2 l0), which the next
   load evaluation reads as tension (24 MN on a 1 m chain segment turning at 15 m/s over 11.25 ms). Without the
-  end-of-step set, a segment going taut inside a step was stretched explicitly and sprang back elastically in the
-  next one, and on a slack chain these snaps ran along it one segment per step and grew until the strain limit;
+  end-of-step set, a segment going taut inside a step would be stretched explicitly and spring back elastically in
+  the next one, and on a slack chain these snaps would run along it one segment per step and grow until the strain
+  limit;
 - line drag per half segment (the exact 3x3 Jacobian of the Morison drag, ``hydro.add_slender_drag_dv``,
   skipped where h times its damping rate is below ``DRAG_SKIP`` of the node mass, i.e. where explicit drag is
-  far from any limit); point-mass drag;
+  far from any limit); point-mass drag (``point_loads.add_point_loads_dv``);
 - seabed contact (vertical spring-damper) and regularised Coulomb friction (its damping slope below the
-  friction velocity, its transverse slope above it);
+  friction velocity, its transverse slope above it; ``seabed.add_seabed_dv``);
 - the anchor through the node at its back tip: the anchor's own loads stay explicit (it is heavy and its
   drag is not stiff), but the line's reaction on it is solved with the lines. After the line tree hanging
   from the body node p is eliminated it is a 3x3 impedance S_p and impulse rho_p at p; with the anchor's
