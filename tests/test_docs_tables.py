@@ -14,8 +14,8 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from _docs import read_block  # noqa: E402
 
-BENCHMARKS = ("bench_drop", "bench_env", "bench_implicit_step", "bench_plan_v1", "bench_rllib", "contact_cost",
-              "contact_episodes", "fall_reference",
+BENCHMARKS = ("bench_drop", "bench_env", "bench_implicit_step", "bench_plan_v1", "bench_rllib", "contact_convergence",
+              "contact_cost", "contact_crosscheck", "contact_episodes", "fall_reference",
               "fall_step", "mbl_exceedance", "pre_release_step", "remesh_at_release", "robustness", "speed_vs_error",
               "statics")
 
