@@ -1,6 +1,6 @@
 """How config keys read to a user: one-line messages for invalid input and the help lines of the ``--set`` keys.
 
-Functions here take the root model (:class:`moor_env.config.SceneConfig`) as an argument and read the key tree
+Functions here take the root model (:class:`moor_env.scene_schema.SceneConfig`) as an argument and read the key tree
 from the pydantic models themselves: field names for "did you mean" suggestions, bounds and units for help.
 """
 

@@ -18,7 +18,7 @@ from moor_env.config_text import BOUND_ERRORS
 from moor_env.errors import ConfigError
 
 if TYPE_CHECKING:
-    from moor_env.config import MaterialConfig, SceneConfig
+    from moor_env.scene_schema import MaterialConfig, SceneConfig
 
 DROP_HEIGHT_KEY = "installation.drop_height_m"
 WATER_DEPTH_KEY = "environment.water_depth_m"

@@ -32,7 +32,7 @@ between ``Simulator.advance_to`` and a loop kernel, but the interpolated touchdo
 Sharing one compiled kernel (one specialisation, any number of scenes) makes row i of the batched env equal the
 single env bit for bit.
 
-Why no ``prange``: the threading layer available here is GNU OpenMP, which is not fork-safe (an
+Why no ``prange``: numba's threading layer without TBB installed is GNU OpenMP, which is not fork-safe (an
 ``AsyncVectorEnv`` forked after a parallel region aborts), and numba's fork-safe ``workqueue`` layer is not
 thread-safe. The batched env instead calls this GIL-free kernel from ``num_threads`` Python threads on
 disjoint groups of scenes of about equal cost (:func:`balanced_groups`; one numba call per group).

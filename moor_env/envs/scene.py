@@ -1,7 +1,7 @@
 """Scenario -> scene -> compiled model: what an episode simulates.
 
 :class:`SceneFactory` reads the config's base scene once, applies the fidelity preset and the config's scene
-overrides, and turns each scenario into a scene mapping, its validated :class:`~moor_env.config.SceneConfig`,
+overrides, and turns each scenario into a scene mapping, its validated :class:`~moor_env.scene_schema.SceneConfig`,
 the statics mapping whose equilibrium starts the episode (:mod:`moor_env.envs.equilibria`) and the compiled
 model (one compile per geometry: a new sea state or chain drag costs none, :func:`derive_model`). A new
 geometry's statics scene is validated section by section against a template of the same resolution
@@ -22,11 +22,6 @@ from pydantic import ValidationError
 from moor_env.compile import Model, compile_scene
 from moor_env.config import (
     SET_SHORTCUTS,
-    AnchorConfig,
-    DiscretizationConfig,
-    EnvironmentConfig,
-    InstallationConfig,
-    MaterialConfig,
     SceneConfig,
     check_scene_consistency,
     scene_dict,
@@ -39,6 +34,13 @@ from moor_env.envs.resolution import TightLineRule, tight_line_keys_by_sea
 from moor_env.envs.scenario import representative_scenario
 from moor_env.errors import ConfigError
 from moor_env.physics import layout as L
+from moor_env.scene_schema import (
+    AnchorConfig,
+    DiscretizationConfig,
+    EnvironmentConfig,
+    InstallationConfig,
+    MaterialConfig,
+)
 
 
 def apply_scene_overrides(base: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
