@@ -8,8 +8,9 @@ drop; with the DNV 0.4456 it falls behind). Where it is off the kernels skip it 
 The static solver leaves the contact out (:func:`without_line_anchor_contact`): its Newton iteration couples the
 anchor to the lines through their attachment only, and a node resting on the anchor would couple them again, a
 stiff loop its block elimination cannot take. Where a hanging equilibrium puts a line through the anchor (the
-loop draped over it: a vessel spacing of about 25 m or less with a vertical chain of 10 m or less), the fall starts
-with those nodes inside and the contact pushes them out in its first steps.
+loop hanging beside the vertical chain, mostly at vessel spacings below a fifth of the depth), ``solve_statics``
+refuses it (``physics/statics_guess.check_anchor_clearance``): a fall from it would start with the contact throwing
+the line out of the body.
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ from moor_env.physics.anchor import tilt_deg
 from moor_env.physics.integrate import INTEGRATOR_IMPLICIT_EULER, INTEGRATOR_RK2, INTEGRATOR_SYMPLECTIC_EULER
 from moor_env.physics.records import STATE_NAMES, SimState
 from moor_env.physics.statics import solve_equilibrium
-from moor_env.physics.statics_guess import change_line_length, check_fibre_clearance
+from moor_env.physics.statics_guess import change_line_length, check_anchor_clearance, check_fibre_clearance
 from moor_env.simulator import Simulator, integrator_code
 
 STATE_ARRAY_FIELDS = STATE_NAMES  # the arrays of a SimState, in order
@@ -101,6 +101,7 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: boo
                 raise StaticsNotConverged(f"the anchor tip hangs {err:+.3g} m from its drop height after 8 wire "
                                           f"corrections (tolerance {tol_m:g} m)", None)
         check_fibre_clearance(sim)
+        check_anchor_clearance(sim)
     sim.state.line_f[:, L.LF_MAX_TENSION] = 0.0
     wall = time.perf_counter() - t0
     release = None

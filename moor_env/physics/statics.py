@@ -8,7 +8,9 @@ every line in the discrete model's own equilibrium without current, a grounded l
 touchdown nodes, excess line laid on the seabed. The calm equilibrium takes a few iterations; the scene's current
 is then applied in one stage, solved as pseudo time stepping that turns into Newton's method. Where that stage
 does not converge, the current is applied in increments from the calm equilibrium instead. The lines' contact
-with the anchor's body is not part of the static problem (``contact_model.without_line_anchor_contact``).
+with the anchor's body is not part of the static problem (``contact_model.without_line_anchor_contact``); where the
+scene models it, ``simulation.solve_statics`` refuses an equilibrium that puts a line through the anchor
+(``statics_guess.check_anchor_clearance``).
 
 All of it runs on the tension-only law smoothed at strain scale ``SMOOTHING_FINAL`` (it differs from the exact law
 by less than EA 1e-8 / 2 on a segment at zero strain, far less elsewhere) and the exact seabed contact.
@@ -127,9 +129,13 @@ def _stop(st) -> None:
     st.body_state[L.BS_OMEGA:L.BS_OMEGA + 3] = 0.0
 
 
-def _slack_counts(st) -> np.ndarray:
-    """Slack counts to start from: a segment slack in the start state is slack in the equilibrium sought (the guess
-    lays excess line on the seabed shortened), so K lets it go at once."""
+def _slack_counts(st, warm: bool) -> np.ndarray:
+    """Slack counts to start from. From the first guess a segment slack in the start state is slack in the
+    equilibrium sought (the guess lays excess line on the seabed shortened), so K lets it go at once. From a warm
+    start none is counted: a corrected wire length leaves the whole wire slack by a few millimetres, and K without
+    the wire's stiffness would let the release point drop in the first step."""
+    if warm:
+        return np.zeros(st.seg_i.shape[0])
     seg = st.seg_i
     length = np.linalg.norm(st.node_pos[seg[:, L.SI_B]] - st.node_pos[seg[:, L.SI_A]], axis=1)
     return np.where(length < st.seg_f[:, L.SF_L0], float(SLACK_PATIENCE), 0.0)
@@ -138,9 +144,9 @@ def _slack_counts(st) -> np.ndarray:
 class _Stage:
     """Runs the kernel in chunks on one current scale, with the progress bar."""
 
-    def __init__(self, sim, ctl: np.ndarray, max_iter: int, progress: bool) -> None:
+    def __init__(self, sim, ctl: np.ndarray, max_iter: int, progress: bool, warm: bool) -> None:
         self.sim, self.ctl, self.max_iter, self.progress = sim, ctl, max_iter, progress
-        self.seg_age = _slack_counts(sim.state)
+        self.seg_age = _slack_counts(sim.state, warm)
         self.t0 = time.perf_counter()
         self.bar = None
 
@@ -222,7 +228,7 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max
     ctl[C_TAU] = 1e3 if warm else TAU_START_S
     ctl[C_MAX_STEP] = max_step_m
     current = float(sim.env_f[L.EF_CUR_SCALE])
-    stage = _Stage(sim, ctl, max_iter, progress)
+    stage = _Stage(sim, ctl, max_iter, progress, warm)
     sim.env_f[L.EF_SLACK_SMOOTHING] = SMOOTHING_FINAL
     sim.env_f[L.EF_SEABED_SMOOTHING] = 0.0
     try:

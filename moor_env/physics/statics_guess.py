@@ -20,12 +20,15 @@ import numpy as np
 
 from moor_env.errors import NoEquilibrium
 from moor_env.physics import layout as L
+from moor_env.physics._jit import jit
+from moor_env.physics.anchor_surface import surface_distance, within_reach
 from moor_env.physics.catenary import hang_line, walk, walk_arcs
 from moor_env.physics.discrete_catenary import discrete_grounded, discrete_hang
 from moor_env.physics.loads import set_constrained_nodes
 
 BALANCE_ROUNDS = 60
 MIN_WIRE_M = 1.0  # shortest wire the solver accepts between the installation vessel and the release point
+ANCHOR_CLEARANCE_M = 0.05  # deepest a line node may lie inside the anchor in an equilibrium that is accepted
 
 
 def line_arrays(sim, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -281,6 +284,54 @@ def check_fibre_clearance(sim) -> None:
         raise NoEquilibrium("installation.mooring_line_length_m", inst.mooring_line_length_m,
                             "a shorter line or a larger vessel_spacing_m",
                             "the fibre rope would rest on the seabed")
+
+
+@jit
+def deepest_inside_anchor(node_pos, node_i, body_state, shape, seabed_z):
+    """The deepest a free node above the seabed (``seabed_z`` [m]) lies inside the anchor's surface [m] (0 where
+    none does) and that node (-1 where none does); the contact law's surface (``physics/anchor_surface.py``)."""
+    deepest = 0.0
+    node = -1
+    for n in range(node_i.shape[0]):
+        if node_i[n, L.NI_KIND] != L.NODE_FREE or node_pos[n, 2] < seabed_z:
+            continue
+        px = node_pos[n, 0]
+        py = node_pos[n, 1]
+        pz = node_pos[n, 2]
+        if not within_reach(px, py, pz, body_state, shape):
+            continue
+        depth = -surface_distance(px, py, pz, body_state, shape)[0]
+        if depth > deepest:
+            deepest = depth
+            node = n
+    return deepest, node
+
+
+def check_anchor_clearance(sim) -> None:
+    """Refuse an equilibrium that puts a line through the anchor's body where the scene models the line-anchor
+    contact (``contact_model``): the static problem leaves the contact out, and a fall from such a state would
+    start with the contact throwing the line out of the body (forces of many MN in its first step).
+
+    Raises
+    ------
+    NoEquilibrium
+        A free node lies more than ``ANCHOR_CLEARANCE_M`` inside the anchor.
+    """
+    m, st = sim.model, sim.state
+    if not m.body_active or m.contact_f[L.CF_ON] == 0.0:
+        return
+    depth, node = deepest_inside_anchor(st.node_pos, st.node_i, st.body_state, m.contact_shape,
+                                        -float(sim.env_f[L.EF_DEPTH]))
+    if depth <= ANCHOR_CLEARANCE_M:
+        return
+    names = {line.index: name for name, line in m.lines.items()}
+    segs = np.nonzero((st.seg_i[:, L.SI_A] == node) | (st.seg_i[:, L.SI_B] == node))[0]
+    line = names.get(int(st.seg_i[segs[0], L.SI_LINE]), "a line") if segs.size else "a line"
+    inst = m.scene.installation
+    raise NoEquilibrium("installation.vessel_spacing_m", inst.vessel_spacing_m,
+                        "a larger vessel_spacing_m (or discretization.line_anchor_contact: off)",
+                        f"the {line.replace('_', ' ')} would hang through the anchor ({depth:.2g} m inside its "
+                        "surface), which the static problem leaves out")
 
 
 def suspending_offset_m(sim, margin_m: float = 5.0, steps: int = 40) -> float:
