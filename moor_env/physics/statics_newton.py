@@ -60,7 +60,7 @@ STATUS_NONFINITE = 2
 
 
 @jit_step
-def _apply(scale, nq, body_node, basis, dq, node_f, node_pos, node_acc, body_state, axis0, saved, tree, orow):
+def _apply(scale, nq, body_node, basis, dq, state, axis0, saved, tree, orow):
     """x += scale * dx for the anchor, and for every free node along the tree from its root: each node is placed
     from its (already moved) parent along the segment's new direction at its linearly predicted length.
 
@@ -70,6 +70,9 @@ def _apply(scale, nq, body_node, basis, dq, node_f, node_pos, node_acc, body_sta
     prediction; the mismatch gathers in the segments to prescribed ends, where Newton corrects it as a linear,
     axial error.
     """
+    node_pos = state.node_pos
+    node_acc = state.node_acc
+    body_state = state.body_state
     if body_node >= 0:
         for c in range(3):
             body_state[L.BS_POS + c] += scale * dq[c]
@@ -78,7 +81,7 @@ def _apply(scale, nq, body_node, basis, dq, node_f, node_pos, node_acc, body_sta
         phy = scale * (dq[3] * basis[0, 1] + dq[4] * basis[1, 1])
         phz = scale * (dq[3] * basis[0, 2] + dq[4] * basis[1, 2])
         rotate_axis(body_state, axis0, phx, phy, phz, 1.0)
-        sp = node_f[body_node, L.NF_BODY_S]
+        sp = state.node_f[body_node, L.NF_BODY_S]
         for c in range(3):
             node_pos[body_node, c] = body_state[L.BS_POS + c] + sp * body_state[L.BS_AXIS + c]
     for k in range(nq - 1, -1, -1):
@@ -118,7 +121,7 @@ def _bounded_step(tau, ctl, nq, body_node, basis, res_body, dq, model, state, sc
     for _ in range(8):
         ctl[C_SOLVES] += solve_step(1.0 / (tau * tau), nq, body_node, basis, res_body, dq, model, state, scratch,
                                     tree, orow, seg_age)
-        size = step_size(body_node, state.node_i, state.node_acc, dq, model.body_f)
+        size = step_size(body_node, model, state, dq)
         if size <= OVERSIZE * ctl[C_MAX_STEP]:
             break
         tau *= 0.1
@@ -189,8 +192,7 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
         saved_body[:] = body_state
         saved_step[:, :] = node_acc
         saved_dq[:] = dq
-        _apply(scale, nq, body_node, basis, dq, state.node_f, node_pos, node_acc, body_state, axis0, saved, tree,
-               orow)
+        _apply(scale, nq, body_node, basis, dq, state, axis0, saved, tree, orow)
         new2, new_worst = residual(model, state, body_node, basis, res_body)
         new_size = math.inf
         new_tau = tau
@@ -200,7 +202,7 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
         shrink = 1.0 - SHRINK * scale
         if (new_size <= shrink * size or (new2 <= shrink * shrink * norm2 and new_size <= GROWTH * size)
                 or new_size < ctl[C_STEP_TOL]):
-            count_slack(node_pos, seg_i, state.seg_f, seg_age)
+            count_slack(state, seg_age)
             cap = min(2.0 * max(cap, scale * size), ctl[C_MAX_STEP])
             norm2 = new2
             worst = new_worst

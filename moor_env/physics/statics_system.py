@@ -217,16 +217,19 @@ def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling
 
 
 @jit_step
-def _solve_body(inv_tau2, p, basis, res_body, body_state, node_f, node_force, body_f, smat, rho_p, dq):
+def _solve_body(inv_tau2, p, basis, res_body, model, state, smat, rho_p, dq):
     """The anchor's five unknowns from the lines' impedance ``smat`` and right-hand side ``rho_p`` at node p.
 
     (J^T S J + K_geo + D_b / tau^2) dq = R_b + J^T rho, with J the body node's motion per unknown (translation,
     then rotation about basis[0] and basis[1]). Writes dq and returns the body node's motion J dq in ``rho_p``.
     """
+    body_state = state.body_state
+    node_force = state.node_force
+    body_f = model.body_f
     ex = body_state[L.BS_AXIS]
     ey = body_state[L.BS_AXIS + 1]
     ez = body_state[L.BS_AXIS + 2]
-    sp = node_f[p, L.NF_BODY_S]
+    sp = state.node_f[p, L.NF_BODY_S]
     jac = np.zeros((3, 5))
     for c in range(3):
         jac[c, c] = 1.0
@@ -282,8 +285,7 @@ def eliminate(inv_tau2, nq, body_node, basis, res_body, dq, model, state, dmat, 
                                + coupling[s, pc, i, 2] * node_acc[c, 2])
     if body_node >= 0:
         rho_p = node_acc[body_node].copy()
-        _solve_body(inv_tau2, body_node, basis, res_body, state.body_state, state.node_f, state.node_force,
-                    model.body_f, dmat[body_node], rho_p, dq)
+        _solve_body(inv_tau2, body_node, basis, res_body, model, state, dmat[body_node], rho_p, dq)
         node_acc[body_node, :] = rho_p
     for k in range(nq - 1, -1, -1):
         c = orow[k, OR_ORDER]
@@ -300,9 +302,12 @@ def eliminate(inv_tau2, nq, body_node, basis, res_body, dq, model, state, dmat, 
 
 
 @jit_step
-def _predict_seabed(body_node, node_pos, node_contact, seabed, node_acc, node_down, orow, release):
-    """Update the nodes predicted on the seabed after the step in ``node_acc``; returns how many changed. With
-    ``release`` False a node on the seabed stays there (the set only grows: no cycling)."""
+def _predict_seabed(body_node, state, seabed, node_down, orow, release):
+    """Update the nodes predicted on the seabed after the step in ``state.node_acc``; returns how many changed.
+    With ``release`` False a node on the seabed stays there (the set only grows: no cycling)."""
+    node_pos = state.node_pos
+    node_contact = state.node_contact
+    node_acc = state.node_acc
     changed = 0
     for n in range(node_pos.shape[0]):
         e = orow[n, OR_EFF]
@@ -335,14 +340,17 @@ def solve_step(inv_tau2, nq, body_node, basis, res_body, dq, model, state, scrat
         _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling, orow)
         eliminate(inv_tau2, nq, body_node, basis, res_body, dq, model, state, dmat, coupling, tree, orow)
         solves += 1
-        if solves >= ACTIVE_SET_ROUNDS or _predict_seabed(body_node, node_pos, state.node_contact, seabed,
-                                                          state.node_acc, node_down, orow, solves == 1) == 0:
+        if solves >= ACTIVE_SET_ROUNDS or _predict_seabed(body_node, state, seabed, node_down, orow,
+                                                          solves == 1) == 0:
             return solves
 
 
 @jit_step
-def step_size(body_node, node_i, node_acc, dq, body_f):
-    """Largest node move of a step [m] (the anchor's rotation counted at its length)."""
+def step_size(body_node, model, state, dq):
+    """Largest node move of a step [m] (the anchor's rotation counted at its length): the free nodes' in
+    ``state.node_acc``, the anchor's in ``dq``."""
+    node_i = state.node_i
+    node_acc = state.node_acc
     biggest = 0.0
     for n in range(node_i.shape[0]):
         if node_i[n, L.NI_KIND] == L.NODE_FREE:
@@ -351,15 +359,18 @@ def step_size(body_node, node_i, node_acc, dq, body_f):
                 biggest = move
     if body_node >= 0:
         move = max(math.sqrt(dq[0] ** 2 + dq[1] ** 2 + dq[2] ** 2),
-                   math.sqrt(dq[3] ** 2 + dq[4] ** 2) * body_f[L.BF_LENGTH])
+                   math.sqrt(dq[3] ** 2 + dq[4] ** 2) * model.body_f[L.BF_LENGTH])
         if not (move <= biggest):
             biggest = move
     return biggest
 
 
 @jit_step
-def count_slack(node_pos, seg_i, seg_f, seg_age):
+def count_slack(state, seg_age):
     """Count the iterations each segment has been slack (0 while taut)."""
+    node_pos = state.node_pos
+    seg_i = state.seg_i
+    seg_f = state.seg_f
     for s in range(seg_i.shape[0]):
         if seg_i[s, L.SI_ACTIVE] == 0:
             continue
