@@ -24,15 +24,13 @@ from moor_env.physics.layout import (
     MF_CDT,
     MF_D,
     MF_EA,
-    MF_MASS,
-    MF_ZETA,
     SF_L0,
     SI_A,
     SI_ACTIVE,
     SI_B,
     SI_MAT,
 )
-from moor_env.physics.line import segment_axis
+from moor_env.physics.line import segment_axis, segment_damping_n_s_m
 from moor_env.physics.point_loads import add_point_loads_dv
 from moor_env.physics.seabed import add_seabed_dv
 from moor_env.physics.tree import OR_EFF, add_sym
@@ -130,12 +128,10 @@ def assemble(h, first, body_node, model, state, orow):
             fz = -h * tension * qz
         elif seg_chord[s, 3] != 0.0:
             fx, fy, fz = _add_chord_spring(s, h, tension, qx, qy, qz, rx, ry, rz, node_pos, a, b, ea, eb, l0,
-                                           mat_f[m, MF_EA], mat_f[m, MF_ZETA] * math.sqrt(mat_f[m, MF_EA]
-                                                                                          * mat_f[m, MF_MASS]),
-                                           seg_chord, node_mm)
+                                           mat_f[m, MF_EA], segment_damping_n_s_m(mat_f, m), seg_chord, node_mm)
         else:
             ea_ = mat_f[m, MF_EA]
-            cq = mat_f[m, MF_ZETA] * math.sqrt(ea_ * mat_f[m, MF_MASS])
+            cq = segment_damping_n_s_m(mat_f, m)
             kq = ea_ / l0
             kt = tension / length
             # unclipped tension of the linear law minus the (clipped) tension already in the loads

@@ -74,6 +74,19 @@ def segment_axis(node_pos, a, b):
 
 
 @jit
+def segment_damping_n_s(mat_f, m, l0):
+    """BA = zeta l0 sqrt(EA w) [N s]: a segment's tension per unit strain rate (material m, unstretched length
+    ``l0`` [m])."""
+    return mat_f[m, MF_ZETA] * l0 * math.sqrt(mat_f[m, MF_EA] * mat_f[m, MF_MASS])
+
+
+@jit
+def segment_damping_n_s_m(mat_f, m):
+    """BA / l0 = zeta sqrt(EA w) [N s/m]: a segment's tension per unit rate of stretch (material m)."""
+    return mat_f[m, MF_ZETA] * math.sqrt(mat_f[m, MF_EA] * mat_f[m, MF_MASS])
+
+
+@jit
 def segment_loads(node_pos, node_vel, seg_i, seg_f, mat_f, line_f, env_f, current_profile,
                   node_force, node_mm, node_mass, node_contact, seg_tension):
     """Accumulate every active segment's loads on its end nodes.
@@ -114,7 +127,7 @@ def segment_loads(node_pos, node_vel, seg_i, seg_f, mat_f, line_f, env_f, curren
             tension = 0.5 * mat_f[m, MF_EA] * (strain + math.sqrt(strain * strain + smoothing * smoothing))
         elif strain > 0.0:
             ea = mat_f[m, MF_EA]
-            ba = mat_f[m, MF_ZETA] * l0 * math.sqrt(ea * mat_f[m, MF_MASS])
+            ba = segment_damping_n_s(mat_f, m, l0)
             rate = ((node_vel[b, 0] - node_vel[a, 0]) * qx + (node_vel[b, 1] - node_vel[a, 1]) * qy
                     + (node_vel[b, 2] - node_vel[a, 2]) * qz) / l0
             tension = ea * strain + ba * rate
