@@ -4,7 +4,8 @@ Run from the repository root: ``python benchmarks/contact_cost.py`` (``--docs-on
 JSON). For each scene and integrator it runs the fall with the contact off and on
 (``discretization.line_anchor_contact``), the least CPU time per step of ``REPEATS`` interleaved runs after a
 warm-up (process time: the machine may be shared), and records the touchdown speed, the chain resting on the anchor
-and how far the chain passed the back end. Writes ``benchmarks/results/contact_cost.json`` and its table in
+and how far the chain passed the back end; for the implicit fall also the linear solves per step and how many of
+them the contact's set asked for. Writes ``benchmarks/results/contact_cost.json`` and its table in
 ``docs/fall-accuracy.md``.
 """
 
@@ -16,6 +17,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
@@ -23,6 +26,11 @@ from _docs import DOCS, RESULTS, load_result, run_line, table, write_blocks  # n
 from _machine import run_record, write_results  # noqa: E402
 
 from moor_env import load_scene, solve_statics  # noqa: E402
+from moor_env.physics import implicit as imp  # noqa: E402
+from moor_env.physics import implicit_contact as ic  # noqa: E402
+from moor_env.physics import layout as L  # noqa: E402
+from moor_env.physics.implicit_active_set import update_active_set  # noqa: E402
+from moor_env.physics.implicit_assembly import assemble  # noqa: E402
 from moor_env.simulation import run_drop  # noqa: E402
 
 CASES = [("vertical-chain", "symplectic_euler"), ("vertical-chain", "implicit_euler"),
@@ -53,6 +61,42 @@ def _fall(sim, saved) -> tuple[float, dict]:
                       "dt_s": result.dt_s}
 
 
+def _solves_per_step(sim, saved) -> dict:
+    """Implicit fall only: linear solves per step and how many of them the contact set asked for, replaying each
+    step's solve loop (``implicit.implicit_euler_update``) from Python before the kernel takes the step (not
+    timed)."""
+    sim.state = saved.copy()
+    sim.release()
+    solves = contact_solves = steps = 0
+    while True:
+        sim.evaluate_loads()
+        model, state = sim.records()
+        body_node = int(np.flatnonzero(state.node_i[:, L.NI_KIND] == L.NODE_BODY)[0])
+        tree, orow = state.pos0.view(np.int64), state.vel0.view(np.int64)
+        nq = imp.prepare(False, body_node, state, tree, orow)
+        contact = model.contact_f[L.CF_ON] != 0.0
+        if contact:
+            ic.init_contact_set(sim.dt, model, state)
+        for it in range(imp.MAX_ACTIVE_SET_SOLVES):
+            solves += 1
+            assemble(sim.dt, it == 0, body_node, model, state, orow)
+            if contact:
+                ic.assemble_contact(sim.dt, model, state)
+            imp.eliminate(sim.dt, nq, model, state, tree, orow)
+            imp.couple_body(sim.dt, body_node, model, state)
+            imp.back_substitute(sim.dt, nq, model, state, tree, orow)
+            changed = update_active_set(sim.dt, model, state, orow)
+            changed_contact = ic.update_contact_set(sim.dt, model, state) if contact else 0
+            contact_solves += changed_contact > 0 and it + 1 < imp.MAX_ACTIVE_SET_SOLVES
+            if changed + changed_contact == 0:
+                break
+        steps += 1
+        status, _ = sim.advance_to(sim.state.t + sim.dt, detect_touchdown=True)
+        if status == L.STATUS_TOUCHDOWN:
+            break
+    return {"steps": steps, "solves_per_step": solves / steps, "contact_solves_per_step": contact_solves / steps}
+
+
 def _case(scene: str, integrator: str) -> dict:
     """Contact off and on, ``REPEATS`` falls each, interleaved (the machine's load drifts), after a warm-up each;
     the fastest CPU time per step of each."""
@@ -65,6 +109,9 @@ def _case(scene: str, integrator: str) -> dict:
         for contact, (sim, saved) in runs.items():
             per_step, _ = _fall(sim, saved)
             out[contact]["us_per_step"] = min(out[contact]["us_per_step"], 1e6 * per_step)
+    if integrator == "implicit_euler":
+        for contact, (sim, saved) in runs.items():
+            out[contact].update(_solves_per_step(sim, saved))
     return {"scene": scene, "integrator": integrator, **out}
 
 
@@ -78,11 +125,13 @@ def docs_blocks(out: dict) -> list[tuple[Path, str, str]]:
                      f"{on['chain_past_back_end_m']:+.2f}", f"{on['chain_on_anchor_m']:.1f}",
                      f"{1e3 * on['contact_peak_depth_m']:.1f}", f"{on['contact_peak_force_n'] / 1e6:.2f}",
                      f"{off['us_per_step']:.1f}", f"{on['us_per_step']:.1f}",
-                     f"{100 * (on['us_per_step'] / off['us_per_step'] - 1):+.0f} %"])
+                     f"{100 * (on['us_per_step'] / off['us_per_step'] - 1):+.0f} %",
+                     f"{off['solves_per_step']:.2f} / {on['solves_per_step']:.2f} "
+                     f"({on['contact_solves_per_step']:.2f})" if "solves_per_step" in on else "-"])
     text = "\n".join([run_line(out, COMMAND), "", table(
         ["scene", "integrator", "touchdown [m/s] without contact", "with", "chain past back end [m] without",
          "with", "chain on anchor [m]", "deepest node [mm]", "peak contact force [MN]", "us/step without", "with",
-         "cost"], rows)])
+         "cost", "solves/step without / with (asked by the contact)"], rows)])
     return [(DOC, "contact_cost", text)]
 
 
