@@ -7,7 +7,8 @@ contact as an active set, pseudo-transient continuation) from the first guess of
 every line in the discrete model's own equilibrium without current, a grounded line across the seabed from its
 touchdown nodes, excess line laid on the seabed. The calm equilibrium takes a few iterations; the scene's current
 is then applied in one stage, solved as pseudo time stepping that turns into Newton's method. Where that stage
-does not converge, the current is applied in increments from the calm equilibrium instead. The lines' contact
+does not converge within a hundred iterations, the current is applied in increments from the calm equilibrium
+instead, and where those do not reach it, in one long stage. The lines' contact
 with the anchor's body is not part of the static problem (``contact_model.without_line_anchor_contact``); where the
 scene models it, ``simulation.solve_statics`` refuses an equilibrium that puts a line through the anchor
 (``statics_guess.check_anchor_clearance``).
@@ -56,7 +57,8 @@ __all__ = ["SMOOTHING_FINAL", "n_static_dofs", "solve_equilibrium", "solve_newto
 
 MAX_ITERATIONS = 2000
 CHUNK_ITERATIONS = 50
-CURRENT_SHARE = 0.5  # of the iterations left that the scene's current in one stage may take
+SHORT_STAGE = 100  # iterations of the first try of the scene's current in one stage
+INCREMENT_ITERATIONS = 400  # iterations of the second try, in increments
 STAGE_TOLERANCE = 1e-2  # residual/weight to which a current increment before the last is solved
 STAGE_STEP_M = 1e-2  # and its step
 STAGE_ITERATIONS = 40  # iterations of one current increment before it is retried at a quarter
@@ -189,10 +191,11 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max
                  warm: bool = False, analytic_guess: bool = True, progress: bool = True) -> StaticsReport:
     """Drive the simulator's current state to static equilibrium in place by Newton's method.
 
-    The calm equilibrium is solved first from the guess, then the scene's current in one stage (at most
-    ``CURRENT_SHARE`` of the iterations left); where that stage does not converge, the current is applied again
-    from the calm equilibrium in increments, each solved to ``STAGE_TOLERANCE``, halved or doubled by how hard the
-    last one was. The lines' contact with the anchor's body is left out (``contact_model``).
+    The calm equilibrium is solved first from the guess, then the scene's current in one stage of at most
+    ``SHORT_STAGE`` iterations; where that stage does not converge, the current is applied again from the calm
+    equilibrium in increments (``INCREMENT_ITERATIONS`` at most), each solved to ``STAGE_TOLERANCE``, halved or
+    doubled by how hard the last one was, and where they do not reach it, in one stage with the iterations left.
+    The lines' contact with the anchor's body is left out (``contact_model``).
 
     Parameters
     ----------
@@ -253,26 +256,42 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max
 
 
 def _apply_current(stage: _Stage, current: float, tol_rel: float, max_iter: int) -> bool:
-    """From the calm equilibrium to the scene's current: in one stage, else in increments; True once converged."""
+    """From the calm equilibrium to the scene's current: in one short stage, else in increments, else in one stage
+    with the iterations left; True once converged.
+
+    Why this order: most scenes take the current in one stage within a few tens of iterations; of those that do
+    not, most reach it in increments within a few hundred, and a few only in one long stage."""
     sim, ctl = stage.sim, stage.ctl
     calm = sim.state.copy()
     calm_age = stage.seg_age.copy()
-    ctl[C_TAU] = TAU_START_S  # pseudo time stepping first: the current swings the lines' soft modes
-    share = int(CURRENT_SHARE * (max_iter - ctl[C_ITERATIONS]))
     step_tol = STEP_TOLERANCE_M if tol_rel < STAGE_TOLERANCE else STAGE_STEP_M
-    if stage.run(current, tol_rel, step_tol, share):
+    ctl[C_TAU] = TAU_START_S  # pseudo time stepping first: the current swings the lines' soft modes
+    if stage.run(current, tol_rel, step_tol, SHORT_STAGE):
         return True
     _restore(sim.state, calm)
     stage.seg_age[:] = calm_age
-    solved, increment, last, last_age = 0.0, 0.25 * current, calm, calm_age
+    if _increments(stage, current, tol_rel, step_tol, min(max_iter, int(ctl[C_ITERATIONS]) + INCREMENT_ITERATIONS)):
+        return True
+    _restore(sim.state, calm)
+    stage.seg_age[:] = calm_age
+    ctl[C_TAU] = TAU_START_S
+    return stage.run(current, tol_rel, step_tol, max_iter)
+
+
+def _increments(stage: _Stage, current: float, tol_rel: float, step_tol: float, max_iter: int) -> bool:
+    """The current in increments from the calm equilibrium (the state), each solved to ``STAGE_TOLERANCE``, doubled
+    or halved by how hard the last one was; True once the scene's current is solved within ``max_iter`` (total)."""
+    sim, ctl = stage.sim, stage.ctl
+    solved, increment, last, last_age = 0.0, 0.25 * current, sim.state.copy(), stage.seg_age.copy()
     while ctl[C_ITERATIONS] < max_iter:
         scale = min(solved + increment, current)
         final = scale >= current
         retry = increment > SMALLEST_CURRENT_STEP * current
         ctl[C_TAU] = TAU_START_S
         start = int(ctl[C_ITERATIONS])
+        budget = STAGE_ITERATIONS if retry else max_iter - start
         if stage.run(scale, tol_rel if final else max(STAGE_TOLERANCE, tol_rel),
-                     step_tol if final else STAGE_STEP_M, STAGE_ITERATIONS if retry else max_iter):
+                     step_tol if final else STAGE_STEP_M, budget):
             if final:
                 return True
             used = int(ctl[C_ITERATIONS]) - start
