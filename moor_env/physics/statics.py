@@ -16,7 +16,8 @@ scene models it, ``simulation.solve_statics`` refuses an equilibrium that puts a
 All of it runs on the tension-only law smoothed at strain scale ``SMOOTHING_FINAL`` (it differs from the exact law
 by less than EA 1e-8 / 2 on a segment at zero strain, far less elsewhere) and the exact seabed contact.
 :func:`solve_equilibrium` finishes with the slow solver of ``physics/statics_relaxation.py`` where Newton's method
-does not converge (``method="auto"``).
+does not converge (``method="auto"``), except where it did not converge in the current from a calm equilibrium
+that puts a line through the anchor of a scene that models their contact: that scene is refused.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from moor_env.contact_model import without_line_anchor_contact
 from moor_env.errors import ConfigError, SimulationDiverged, StaticsNotConverged
 from moor_env.physics import layout as L
 from moor_env.physics import statics_relaxation
-from moor_env.physics.statics_guess import first_guess
+from moor_env.physics.statics_guess import anchor_intrusion, first_guess, refuse_anchor_intrusion
 from moor_env.physics.statics_newton import (
     C_CAP,
     C_CUTS,
@@ -82,7 +83,6 @@ def n_static_dofs(sim) -> int:
     return 3 * free + (5 if body_root(sim) >= 0 else 0)
 
 
-@without_line_anchor_contact
 def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max_step_m: float = 20.0,
                       warm: bool = False, analytic_guess: bool = True, progress: bool = True,
                       method: str = "auto") -> StaticsReport:
@@ -91,15 +91,28 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS
     ``method``: "auto" runs :func:`solve_newton` and, where it does not converge, the slow, robust solver of
     ``physics/statics_relaxation.py`` from the same start; "newton" and "relaxation" run one of them only.
     Other parameters and exceptions as :func:`solve_newton`; the report's ``method`` says which solver finished.
+    Where Newton's method does not converge in the current from a calm equilibrium that puts a line through the
+    anchor, and the scene models their contact, the scene is refused instead
+    (:func:`moor_env.physics.statics_guess.refuse_anchor_intrusion`): no fallback is run.
     """
     if method not in METHODS:
         raise ConfigError("method", method, "one of " + ", ".join(METHODS))
+    return _equilibrium(sim, tol_rel, max_iter, max_step_m, warm, analytic_guess, progress, method,
+                        bool(sim.model.contact_f[L.CF_ON] != 0.0))
+
+
+@without_line_anchor_contact
+def _equilibrium(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, analytic_guess: bool,
+                 progress: bool, method: str, contact_modelled: bool) -> StaticsReport:
     start = sim.state.copy()
     try:
         if method == "relaxation":
             raise StaticsNotConverged("the relaxation solver was asked for")
         return solve_newton(sim, tol_rel, max_iter, max_step_m, warm, analytic_guess, progress)
     except (StaticsNotConverged, SimulationDiverged) as exc:
+        calm = getattr(exc, "calm_intrusion", None)
+        if contact_modelled and calm is not None:
+            refuse_anchor_intrusion(sim, *calm, calm_unsolved=True)
         if method == "newton":
             raise _as_not_converged(exc) from exc
         _restore(sim.state, start)
@@ -234,12 +247,14 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max
     stage = _Stage(sim, ctl, max_iter, progress, warm)
     sim.env_f[L.EF_SLACK_SMOOTHING] = SMOOTHING_FINAL
     sim.env_f[L.EF_SEABED_SMOOTHING] = 0.0
+    calm_intrusion = None
     try:
         calm = 0.0 if current > 0.0 and not warm else current
         final = calm == current
         done = stage.run(calm, tol_rel if final else STAGE_TOLERANCE, STEP_TOLERANCE_M if final else STAGE_STEP_M,
                          max_iter)
         if done and not final:
+            calm_intrusion = anchor_intrusion(sim)
             _apply_current(stage, current, tol_rel, max_iter)
     finally:
         sim.env_f[L.EF_CUR_SCALE] = current
@@ -250,8 +265,10 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max
     iterations = int(ctl[C_ITERATIONS])
     if ctl[C_STATUS] != STATUS_CONVERGED:
         reason = "a non-finite residual" if ctl[C_STATUS] == STATUS_NONFINITE else f"{iterations} iterations"
-        raise StaticsNotConverged(f"static equilibrium not reached after {reason} (largest residual/weight "
+        exc = StaticsNotConverged(f"static equilibrium not reached after {reason} (largest residual/weight "
                                   f"{ctl[C_RESIDUAL]:.3g}, tolerance {tol_rel:g})", float(ctl[C_RESIDUAL]))
+        exc.calm_intrusion = calm_intrusion  # the calm equilibrium's line node deepest inside the anchor
+        raise exc
     return StaticsReport(iterations, float(ctl[C_RESIDUAL]), 0.0, n_dofs, "newton")
 
 

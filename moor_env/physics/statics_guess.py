@@ -317,21 +317,35 @@ def check_anchor_clearance(sim) -> None:
     NoEquilibrium
         A free node lies more than ``ANCHOR_CLEARANCE_M`` inside the anchor.
     """
+    if sim.model.contact_f[L.CF_ON] != 0.0:
+        refuse_anchor_intrusion(sim, *anchor_intrusion(sim))
+
+
+def anchor_intrusion(sim) -> tuple[float, str]:
+    """How deep the deepest line node lies inside the anchor [m] and its line's name ("" where none does, or
+    without an anchor)."""
     m, st = sim.model, sim.state
-    if not m.body_active or m.contact_f[L.CF_ON] == 0.0:
-        return
+    if not m.body_active:
+        return 0.0, ""
     depth, node = deepest_inside_anchor(st.node_pos, st.node_i, st.body_state, m.contact_shape,
                                         -float(sim.env_f[L.EF_DEPTH]))
-    if depth <= ANCHOR_CLEARANCE_M:
-        return
     names = {line.index: name for name, line in m.lines.items()}
     segs = np.nonzero((st.seg_i[:, L.SI_A] == node) | (st.seg_i[:, L.SI_B] == node))[0]
-    line = names.get(int(st.seg_i[segs[0], L.SI_LINE]), "a line") if segs.size else "a line"
-    inst = m.scene.installation
-    raise NoEquilibrium("installation.vessel_spacing_m", inst.vessel_spacing_m,
+    return depth, names.get(int(st.seg_i[segs[0], L.SI_LINE]), "") if node >= 0 and segs.size else ""
+
+
+def refuse_anchor_intrusion(sim, depth_m: float, line: str, calm_unsolved: bool = False) -> None:
+    """Raise :class:`NoEquilibrium` naming the vessel spacing where a line node lies more than
+    ``ANCHOR_CLEARANCE_M`` inside the anchor (``depth_m``, from :func:`anchor_intrusion`). ``calm_unsolved``: the
+    depth is the calm equilibrium's, from which the static solve found none in the scene's current."""
+    if depth_m <= ANCHOR_CLEARANCE_M:
+        return
+    where = (f"in calm water ({depth_m:.2g} m inside its surface), which the static problem leaves out, and no "
+             "equilibrium in the current follows from there" if calm_unsolved
+             else f"({depth_m:.2g} m inside its surface), which the static problem leaves out")
+    raise NoEquilibrium("installation.vessel_spacing_m", sim.model.scene.installation.vessel_spacing_m,
                         "a larger vessel_spacing_m (or discretization.line_anchor_contact: off)",
-                        f"the {line.replace('_', ' ')} would hang through the anchor ({depth:.2g} m inside its "
-                        "surface), which the static problem leaves out")
+                        f"the {(line or 'line').replace('_', ' ')} would hang through the anchor {where}")
 
 
 def suspending_offset_m(sim, margin_m: float = 5.0, steps: int = 40) -> float:

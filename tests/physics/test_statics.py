@@ -316,6 +316,29 @@ def test_line_through_the_anchor_is_refused():
     assert depth > ANCHOR_CLEARANCE_M and node >= 0
 
 
+def test_unsolved_current_from_a_calm_state_through_the_anchor_is_refused(monkeypatch):
+    """Mechanism: where the current stage does not converge (replaced here by one that gives up) from a calm
+    equilibrium with the loop through the anchor, a scene that models the line-anchor contact is refused naming
+    the vessel spacing, without the relaxation fallback; with the contact off the same failure stays a
+    StaticsNotConverged."""
+    import moor_env.physics.statics as statics
+    from moor_env.errors import StaticsNotConverged
+    from moor_env.physics import statics_relaxation
+
+    def give_up(stage, *args):
+        stage.ctl[statics.C_STATUS] = statics.STATUS_RUNNING
+        return False
+
+    monkeypatch.setattr(statics, "_apply_current", give_up)
+    monkeypatch.setattr(statics_relaxation, "solve_equilibrium", lambda *a, **k: pytest.fail("the fallback ran"))
+    scene = {"vessel_spacing_m": 0.0, "current_scale": 1.0, "fidelity": "fast"}
+    with pytest.raises(NoEquilibrium, match="in calm water") as info:
+        solve_statics(load_scene("gjoa-500", {**scene, NO_CONTACT: "on"}), progress=False)
+    assert info.value.key == "installation.vessel_spacing_m"
+    with pytest.raises(StaticsNotConverged):
+        solve_statics(load_scene("gjoa-500", {**scene, NO_CONTACT: "off"}), progress=False, method="newton")
+
+
 def test_anchor_clearance_depth_is_the_surface_distance():
     """Reference: the anchor's surface (gjoa-500: one cylinder of radius 0.6 m, 13 m long); a node on the axis at
     the cylinder's middle lies inside by the radius, one a metre beside it lies outside (depth 0). Tolerance
