@@ -80,9 +80,10 @@ def evaluate(run: Path, sites: int, jobs: int, progress: bool = True) -> dict:
     results = evaluate_targets(targets, scenarios, None, PLAN_V1_CONFIG, jobs, progress, OPTIMISER)
     stats = evaluation_statistics(results)
     summaries = [{k: r[k] for k in ("policy", "env_id", "summary", "wall_s")} for r in results]
-    meta = {**run_record(load_before), "source_commit": _source_commit(), "command": COMMAND, "sites": sites, "jobs": jobs, "optimiser": OPTIMISER,
-            "wall_s": time.perf_counter() - t0, "trained_run": {"name": run.name, "seeds": _run_meta(run)},
-            "summaries": summaries}
+    meta = {**run_record(load_before), "source_commit": _source_commit(), "command": COMMAND, "sites": sites,
+            "jobs": jobs, "optimiser": OPTIMISER,
+            "wall_s": time.perf_counter() - t0, "summaries": summaries,
+            "trained_run": {"name": run.name, "seeds": _run_meta(run)}}
     write_records(results, RESULTS, stats, meta)
     plot_distributions(results, DOCS / "agents-distributions.png")
     return {"results": results, "statistics": stats}
