@@ -89,11 +89,38 @@ def evaluate(run: Path, sites: int, jobs: int, progress: bool = True) -> dict:
     return {"results": results, "statistics": stats}
 
 
-def plot_curves(run: Path, jobs: int) -> Path:
-    """Success against env steps of every seed of the run, the crew and the optimiser as levels on the same
-    evaluation episodes."""
-    levels = baseline_levels(["crew", "optimiser"], run, jobs)
-    return plot_learning_curves({"SAC": learning_curves(run)}, levels, DOCS / "agents-learning-curves.png")
+def _results_from_records(data: dict) -> list[dict]:
+    """The evaluated policies of a results JSON as evaluation results (policy, episodes), in the table's order."""
+    order = [s["policy"] for s in data["meta"]["summaries"]]
+    return [{"policy": name, "episodes": [e for e in data["episodes"] if e["policy"] == name]} for name in order]
+
+
+def add_run(run: Path, jobs: int, progress: bool = True) -> dict:
+    """Evaluate one more trained run on the same held-out sites and add it to the results JSON: its records, its
+    row, and the statistics recomputed over every policy (its paired difference to the crew included)."""
+    data = load_result(RESULTS_STEM)
+    meta = data["meta"]
+    load_before = os.getloadavg()[0]
+    t0 = time.perf_counter()
+    (added,) = evaluate_targets([str(run)], held_out_sites(meta["sites"]), None, PLAN_V1_CONFIG, jobs, progress)
+    results = [r for r in _results_from_records(data) if r["policy"] != added["policy"]] + [added]
+    summaries = [s for s in meta["summaries"] if s["policy"] != added["policy"]]
+    summaries.append({k: added[k] for k in ("policy", "env_id", "summary", "wall_s")})
+    runs = [a for a in meta.get("added_runs", []) if a["name"] != added["policy"]]
+    runs.append({"name": run.name, "seeds": _run_meta(run), "source_commit": _source_commit(),
+                 **run_record(load_before), "wall_s": time.perf_counter() - t0})
+    meta = {**meta, "summaries": summaries, "added_runs": runs}
+    stats = evaluation_statistics(results)
+    write_records(results, RESULTS, stats, meta)
+    return {"results": results, "statistics": stats}
+
+
+def plot_curves(runs: dict[str, Path], jobs: int) -> Path:
+    """Success against env steps of every seed of each run (label -> run), the crew and the optimiser as levels
+    on the same evaluation episodes."""
+    levels = baseline_levels(["crew", "optimiser"], next(iter(runs.values())), jobs)
+    curves = {label: learning_curves(run) for label, run in runs.items()}
+    return plot_learning_curves(curves, levels, DOCS / "agents-learning-curves.png")
 
 
 def _pct(x: float) -> str:
@@ -112,8 +139,19 @@ def headline(data: dict) -> str:
             f"[{100 * seeds['ci'][0]:.0f}, {100 * seeds['ci'][1]:.0f}] %), the crew's rule of thumb on "
             f"{_pct(success['crew']['rate'])}, random plans on {_pct(success['random']['rate'])}, the per-site "
             f"optimiser on {_pct(success['optimiser']['rate'])}; trained minus crew {100 * diff['difference']:+.1f} "
-            f"points (paired 95 % interval [{100 * diff['ci'][0]:+.1f}, {100 * diff['ci'][1]:+.1f}]). "
-            f"`{COMMAND}`, run {meta['date'][:10]}: [docs/agents-results.md](docs/agents-results.md).")
+            f"points (paired 95 % interval [{100 * diff['ci'][0]:+.1f}, {100 * diff['ci'][1]:+.1f}])"
+            f"{_added_headline(data)}. `{COMMAND}`, run {meta['date'][:10]}: "
+            f"[docs/agents-results.md](docs/agents-results.md).")
+
+
+def _added_headline(data: dict) -> str:
+    """``; PPO (5 seeds) 80 % (IQM)`` for every added run."""
+    parts = []
+    for added in data["meta"].get("added_runs", []):
+        seeds = data["statistics"]["seeds"].get(added["name"])
+        if seeds is not None:
+            parts.append(f"; `{added['name']}` ({seeds['runs']} seeds) {_pct(seeds['iqm'])} (IQM)")
+    return "".join(parts)
 
 
 def results_block(data: dict) -> str:
@@ -123,12 +161,31 @@ def results_block(data: dict) -> str:
     load = meta["load_average_1min"]
     opt = meta["optimiser"]
     lines = [f"`{COMMAND}`, run {meta['date'][:19].replace('T', ' ')} UTC on {meta['machine']} (1-min load average "
-             f"{load['before']:.1f} -> {load['after']:.1f}), {meta['sites']} held-out sites, {meta['jobs']} "
+             f"{load['before']:.1f} -> {load['after']:.1f}), code at {_short(meta.get('source_commit'))}, "
+             f"{meta['sites']} held-out sites, {meta['jobs']} "
              f"workers, {meta['wall_s'] / 60:.0f} min. `{meta['trained_run']['name']}`: {seeds}; "
              f"`{BUNDLED}`: its bundled seed; optimiser: {opt['population']} candidates x {opt['iterations']} "
-             f"cross-entropy iterations per site.", "", markdown_table(meta["summaries"]).rstrip("\n"), "",
+             f"cross-entropy iterations per site.{_added_line(meta)}", "",
+             markdown_table(meta["summaries"]).rstrip("\n"), "",
              "```text", format_statistics(data["statistics"]).rstrip("\n"), "```"]
     return "\n".join(lines)
+
+
+def _short(commit: str | None) -> str:
+    """``21410d2`` of a full commit hash, with `` with edits`` where the tree differed from it."""
+    if not commit:
+        return "an unknown commit"
+    return commit[:7] + (" with edits to the evaluation script" if commit.endswith("+dirty") else "")
+
+
+def _added_line(meta: dict) -> str:
+    """The runs evaluated later on the same sites, with their seeds and source commit."""
+    out = ""
+    for added in meta.get("added_runs", []):
+        seeds = ", ".join(f"seed {s['seed']} {s['timesteps']} steps" for s in added["seeds"])
+        out += (f" `{added['name']}` ({seeds}) added on {added['date'][:19].replace('T', ' ')} UTC, code at "
+                f"{_short(added['source_commit'])}.")
+    return out
 
 
 def docs_blocks(data: dict | None) -> list[tuple[Path, str, str]]:
@@ -149,20 +206,28 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--run", default="runs/full", help="the trained run (a folder of seed-* runs)")
     parser.add_argument("--sites", type=int, default=500, help="held-out sites")
     parser.add_argument("--jobs", type=int, default=2, help="worker processes")
+    parser.add_argument("--add", help="evaluate one more trained run on the same sites and add it to the results")
+    parser.add_argument("--curves", nargs="*", default=None, metavar="LABEL=RUN",
+                        help="learning curves to plot (default: SAC=the --run)")
     parser.add_argument("--no-progress", action="store_true")
     parser.add_argument("--docs-only", action="store_true",
                         help=f"rewrite the docs text from {RESULTS.relative_to(ROOT)}, run nothing")
     args = parser.parse_args(argv)
     if not args.docs_only:
-        run = Path(args.run)
+        run = Path(args.add or args.run)
+        curves = dict(c.split("=", 1) for c in args.curves) if args.curves else {"SAC": args.run}
         try:
-            run_dirs(run)
+            for path in (run, *curves.values()):
+                run_dirs(path)
         except ConfigError as exc:
             print(f"error: {exc} (train it: python -m agents.train --config configs/agents/full.yaml)",
                   file=sys.stderr)
             return 2
-        evaluate(run, args.sites, args.jobs, not args.no_progress)
-        plot_curves(run, args.jobs)
+        if args.add:
+            add_run(run, args.jobs, not args.no_progress)
+        else:
+            evaluate(run, args.sites, args.jobs, not args.no_progress)
+        plot_curves({label: Path(path) for label, path in curves.items()}, args.jobs)
     write_blocks(docs_from_results())
     return 0
 
