@@ -383,7 +383,7 @@ def main() -> None:
             results[case.name]["active_set_solves"] = solves_per_step(case)
     out = {**run_record(load_before), "repeats": args.repeats, "rounds": args.rounds, "cases": results}
     if baseline:
-        out["baseline"] = {"root": str(args.baseline_root), "label": args.baseline_label}
+        out["baseline"] = {"label": args.baseline_label}  # where the other tree lay on that machine means nothing here
         out["against_baseline"] = compare(results, baseline)
         for k in range(args.rounds):
             args.out.with_name(args.out.stem + f"_baseline_{k}.json").unlink()
