@@ -17,7 +17,9 @@ speed/tilt distributions to ``docs/``, and the table in ``docs/agents-results.md
 from __future__ import annotations
 
 import argparse
+import json
 import os
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -49,8 +51,6 @@ OPTIMISER = {"population": 8, "iterations": 3, "elite": 3}
 
 def _run_meta(run: Path) -> list[dict]:
     """What each seed of the trained run was: seed, env steps, training wall time, source commit."""
-    import json  # noqa: PLC0415 - only here
-
     out = []
     for d in run_dirs(run):
         meta = json.loads((Path(d) / "meta.json").read_text())
@@ -60,8 +60,6 @@ def _run_meta(run: Path) -> list[dict]:
 
 def _source_commit() -> str | None:
     """The commit of the evaluated code, None outside a git checkout (``+dirty`` where files differ from it)."""
-    import subprocess  # noqa: PLC0415 - only here
-
     try:
         head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True, check=True)
         dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT,
