@@ -19,7 +19,10 @@ from pathlib import Path
 
 import numba
 
-FASTMATH_FLAGS = {"nsz", "arcp", "contract", "reassoc"}
+# No "reassoc": with it a kernel compiled in the running process and the same kernel loaded from the cache
+# round differently (a static solve converged from the cache and stalled when freshly compiled), so a result
+# would depend on whether the cache was warm; without it both agree bit for bit.
+FASTMATH_FLAGS = {"nsz", "arcp", "contract"}
 
 
 def _kernel_source_hash() -> str:
