@@ -143,16 +143,7 @@ def assemble(h, first, body_node, model, state, orow):
             fx = w * qx + h * h * kt * rx
             fy = w * qy + h * h * kt * ry
             fz = w * qz + h * h * kt * rz
-            gxx = alpha * qx * qx + beta
-            gyy = alpha * qy * qy + beta
-            gzz = alpha * qz * qz + beta
-            gxy = alpha * qx * qy
-            gxz = alpha * qx * qz
-            gyz = alpha * qy * qz
-            if ea >= 0:
-                add_sym(node_mm, ea, gxx, gyy, gzz, gxy, gxz, gyz)
-            if eb >= 0:
-                add_sym(node_mm, eb, gxx, gyy, gzz, gxy, gxz, gyz)
+            _add_axial_block(node_mm, ea, eb, alpha, beta, qx, qy, qz)
         if ea >= 0:
             node_acc[ea, 0] += fx
             node_acc[ea, 1] += fy
@@ -187,6 +178,14 @@ def _add_chord_spring(s, h, tension, q0x, q0y, q0z, rx, ry, rz, node_pos, a, b, 
     fz = h * (t_lin * qz - tension * q0z) - w * qz - h * kt * ez
     alpha = h * cq + h * h * (kq - kt)
     beta = h * h * kt
+    _add_axial_block(node_mm, ea, eb, alpha, beta, qx, qy, qz)
+    return fx, fy, fz
+
+
+@jit_step
+def _add_axial_block(node_mm, ea, eb, alpha, beta, qx, qy, qz):
+    """Add a segment's block alpha q q^T + beta I (its damping and stiffness along and across the axis q) to the
+    blocks of both end nodes (a negative index: the end is not a free node)."""
     gxx = alpha * qx * qx + beta
     gyy = alpha * qy * qy + beta
     gzz = alpha * qz * qz + beta
@@ -197,4 +196,3 @@ def _add_chord_spring(s, h, tension, q0x, q0y, q0z, rx, ry, rz, node_pos, a, b, 
         add_sym(node_mm, ea, gxx, gyy, gzz, gxy, gxz, gyz)
     if eb >= 0:
         add_sym(node_mm, eb, gxx, gyy, gzz, gxy, gxz, gyz)
-    return fx, fy, fz
