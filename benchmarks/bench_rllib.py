@@ -9,9 +9,9 @@ steps/s and episodes/s over the iterations' wall time, sampling and learning tog
 env stepped in this process with uniform random actions after a few untimed episodes (PPO's initial Gaussian
 policy also releases on about half of the steps, so episodes are comparably short).
 
-Every reset solves its hanging equilibrium (milliseconds, part of the measured throughput). Writes ``benchmarks/results/bench_rllib.json`` with the machine, the
-load averages and the versions, and the table in ``docs/rllib.md`` from ``bench_rllib*.json`` (``--docs-only``:
-only the table, from the committed JSON).
+Every reset solves its hanging equilibrium (milliseconds, part of the measured throughput). Writes
+``benchmarks/results/bench_rllib.json`` with the machine, the load averages and the versions, and the table in
+``docs/rllib.md`` from ``bench_rllib*.json`` (``--docs-only``: only the table, from the committed JSON).
 """
 
 from __future__ import annotations

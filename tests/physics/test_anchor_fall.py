@@ -16,7 +16,8 @@ def _closed_form(model):
     bf = model.body_f
     rho = model.env_f[L.EF_RHO]
     props = model.extras["anchor"]
-    axial_cd_area = bf[L.BF_TIP_CDA] + bf[L.BF_BACK_CDA] + props.quadrature[:, L.BQ_CDT_PID] @ props.quadrature[:, L.BQ_DS]
+    quad = props.quadrature
+    axial_cd_area = bf[L.BF_TIP_CDA] + bf[L.BF_BACK_CDA] + quad[:, L.BQ_CDT_PID] @ quad[:, L.BQ_DS]
     k = 0.5 * rho * axial_cd_area
     mass = bf[L.BF_MASS_AXIAL]
     weight = bf[L.BF_WEIGHT] - bf[L.BF_BUOYANCY]

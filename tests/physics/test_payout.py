@@ -42,6 +42,7 @@ def test_wire_haul_in_to_a_very_short_line_and_out_again():
     paid = 2.0 * (sim.state.t - t0)
     assert sim.line_length_m("wire") == pytest.approx(sim.state.line_f[wire, L.LF_L_MIN_TOP] + paid, rel=1e-9)
     assert sim.line_mass_kg("wire") == pytest.approx(24.7 * sim.line_length_m("wire"), rel=1e-12)
-    lengths = sim.state.seg_f[sim.state.seg_i[:, L.SI_LINE] == wire][sim.state.seg_i[sim.state.seg_i[:, L.SI_LINE] == wire, L.SI_ACTIVE] == 1, L.SF_L0]
+    on_wire = sim.state.seg_i[:, L.SI_LINE] == wire
+    lengths = sim.state.seg_f[on_wire][sim.state.seg_i[on_wire, L.SI_ACTIVE] == 1, L.SF_L0]
     assert lengths.min() >= sim.state.line_f[wire, L.LF_L_MIN_TOP] - 1e-9
     assert lengths.max() <= sim.state.line_f[wire, L.LF_L_MAX_TOP] + 1e-9

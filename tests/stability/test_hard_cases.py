@@ -103,7 +103,8 @@ def test_vertical_chain_slack_during_the_fall():
     sim = solve_statics(load_scene("gjoa-500")).simulator
     sim.release()
     line = sim.model.lines["vertical_chain"].index
-    segs = slice(sim.state.line_i[line, L.LI_SEG_START], sim.state.line_i[line, L.LI_SEG_START] + sim.state.line_i[line, L.LI_NSEG])
+    seg_start = sim.state.line_i[line, L.LI_SEG_START]
+    segs = slice(seg_start, seg_start + sim.state.line_i[line, L.LI_NSEG])
     slack_seen = 0
     for k in range(1, 17):
         sim.advance_to(0.25 * k)
