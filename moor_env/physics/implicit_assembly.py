@@ -10,19 +10,12 @@ the active set contributes the removal of its start-of-step tension.
 
 from __future__ import annotations
 
-import math
-
 from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.environment import current_velocity
 from moor_env.physics.hydro import add_slender_added_mass, add_slender_drag_dv
 from moor_env.physics.implicit_active_set import chord_point, is_active
 from moor_env.physics.layout import (
     EF_RHO,
-    MF_CAN,
-    MF_CAT,
-    MF_CDN,
-    MF_CDT,
-    MF_D,
     MF_EA,
     SF_L0,
     SI_A,
@@ -30,7 +23,7 @@ from moor_env.physics.layout import (
     SI_B,
     SI_MAT,
 )
-from moor_env.physics.line import segment_axis, segment_damping_n_s_m
+from moor_env.physics.line import half_segment_morison, segment_axis, segment_damping_n_s_m
 from moor_env.physics.point_loads import add_point_loads_dv
 from moor_env.physics.seabed import add_seabed_dv
 from moor_env.physics.tree import OR_EFF, add_sym
@@ -89,20 +82,15 @@ def assemble(h, first, body_node, model, state, orow):
             continue
         m = seg_i[s, SI_MAT]
         l0 = seg_f[s, SF_L0]
-        half = 0.5 * l0
-        d = mat_f[m, MF_D]
-        cn = 0.5 * rho * mat_f[m, MF_CDN] * d * half
-        ct = 0.5 * rho * mat_f[m, MF_CDT] * math.pi * d * half
+        cn, ct, ma_n, ma_t = half_segment_morison(mat_f, m, l0, rho)
         length, qx, qy, qz = segment_axis(node_pos, a, b)
-        volume = 0.25 * math.pi * d * d * half
         for end in range(2):
             n = a if end == 0 else b
             e = ea if end == 0 else eb
             if e < 0 or e == body_node:
                 continue
             if not first:
-                add_slender_added_mass(node_mm, e, qx, qy, qz, rho * volume * mat_f[m, MF_CAN],
-                                       rho * volume * mat_f[m, MF_CAT])
+                add_slender_added_mass(node_mm, e, qx, qy, qz, ma_n, ma_t)
             if cn > 0.0 or ct > 0.0:
                 ux, uy, uz = current_velocity(node_pos[n, 2], env_f, current_profile)
                 rx = ux - node_vel[n, 0]

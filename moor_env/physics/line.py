@@ -87,6 +87,20 @@ def segment_damping_n_s_m(mat_f, m):
 
 
 @jit
+def half_segment_morison(mat_f, m, l0, rho):
+    """Morison coefficients of the half of a segment (material m, unstretched length ``l0`` [m]) that each end
+    node carries, in water of density ``rho`` [kg/m^3]: normal and tangential drag factors ``0.5 rho C_D A``
+    [kg/m] (the arguments of :func:`moor_env.physics.hydro.slender_drag`) and normal and tangential added mass
+    [kg]."""
+    half = 0.5 * l0
+    d = mat_f[m, MF_D]
+    drag_n = 0.5 * rho * mat_f[m, MF_CDN] * d * half
+    drag_t = 0.5 * rho * mat_f[m, MF_CDT] * math.pi * d * half
+    volume = 0.25 * math.pi * d * d * half
+    return drag_n, drag_t, rho * volume * mat_f[m, MF_CAN], rho * volume * mat_f[m, MF_CAT]
+
+
+@jit
 def segment_loads(node_pos, node_vel, seg_i, seg_f, mat_f, line_f, env_f, current_profile,
                   node_force, node_mm, node_mass, node_contact, seg_tension):
     """Accumulate every active segment's loads on its end nodes.
@@ -139,11 +153,7 @@ def segment_loads(node_pos, node_vel, seg_i, seg_f, mat_f, line_f, env_f, curren
             line_f[line, LF_MAX_TENSION] = tension
         half = 0.5 * l0
         d = mat_f[m, MF_D]
-        drag_n = 0.5 * rho * mat_f[m, MF_CDN] * d * half
-        drag_t = 0.5 * rho * mat_f[m, MF_CDT] * math.pi * d * half
-        volume = 0.25 * math.pi * d * d * half
-        ma_n = rho * volume * mat_f[m, MF_CAN]
-        ma_t = rho * volume * mat_f[m, MF_CAT]
+        drag_n, drag_t, ma_n, ma_t = half_segment_morison(mat_f, m, l0, rho)
         half_mass = mat_f[m, MF_MASS] * half
         half_weight = mat_f[m, MF_SUBMERGED] * half * g
         for end in range(2):
