@@ -22,7 +22,7 @@ from moor_env.errors import NoEquilibrium
 from moor_env.physics import layout as L
 from moor_env.physics._jit import jit
 from moor_env.physics.anchor_surface import surface_distance, within_reach
-from moor_env.physics.catenary import hang_line, walk, walk_arcs
+from moor_env.physics.catenary_kernels import hang_line, walk, walk_arcs
 from moor_env.physics.discrete_catenary import discrete_grounded, discrete_hang
 from moor_env.physics.loads import set_constrained_nodes
 
