@@ -55,6 +55,13 @@ def seabed_force(z, vx, vy, vz, contact_area, env_f):
     return -friction * vx, -friction * vy, fz
 
 
+@jit
+def seabed_stiffness_n_m(contact_area, env_f):
+    """Normal stiffness [N/m] of the seabed under a node of contact area ``contact_area`` [m^2] pressed into it:
+    the slope of :func:`seabed_force`'s unsmoothed normal force."""
+    return env_f[EF_KBOT] * contact_area
+
+
 @jit_step
 def add_seabed_dv(node_mm, node_acc, e, h, z, vx, vy, vz, contact_area, env_f):
     """Add the seabed law's linearisation at a node of height ``z`` [m], velocity (vx, vy, vz) [m/s] and contact area

@@ -37,8 +37,9 @@ from moor_env.physics._jit import jit_step
 from moor_env.physics.environment import current_velocity
 from moor_env.physics.hydro import slender_drag_dq
 from moor_env.physics.linalg3 import inverse3
-from moor_env.physics.line import segment_axis
+from moor_env.physics.line import half_segment_morison, segment_axis
 from moor_env.physics.loads import compute_loads, set_constrained_nodes
+from moor_env.physics.seabed import seabed_stiffness_n_m
 from moor_env.physics.tree import OR_EFF, OR_ORDER, TR_DEG, TR_NB, TR_SEG
 
 SLACK_STIFFNESS = 1e-6  # least stiffness of a segment in K, as a fraction of EA / l0 (keeps K regular)
@@ -142,12 +143,11 @@ def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling
         for c in range(3):
             rhs[body_node, c] = 0.0  # the anchor's own residual enters at the root
     seabed = -env_f[L.EF_DEPTH]
-    kbot = env_f[L.EF_KBOT]
     for n in range(nn):
         e = orow[n, OR_EFF]
         if e < 0 or e == body_node or node_contact[n] <= 0.0:
             continue
-        k = kbot * node_contact[n]
+        k = seabed_stiffness_n_m(node_contact[n], env_f)
         penetration = seabed - node_pos[n, 2]
         if node_down[n] == 1:
             dmat[e, 2, 2] += k
@@ -195,9 +195,7 @@ def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling
         # current drag turns with the segment: d f_end / d x_b = D_end P / length, d / d x_a = -D_end P / length
         if env_f[L.EF_CUR_SCALE] == 0.0 or length <= 0.0:
             continue
-        d = mat_f[mat, L.MF_D]
-        cn = 0.25 * rho * mat_f[mat, L.MF_CDN] * d * l0
-        ct = 0.25 * rho * mat_f[mat, L.MF_CDT] * math.pi * d * l0
+        cn, ct, _, _ = half_segment_morison(mat_f, mat, l0, rho)
         for end in range(2):
             node = a if end == 0 else b
             ux, uy, uz = current_velocity(node_pos[node, 2], env_f, model.current_profile)
