@@ -7,7 +7,7 @@ line above its MBL, the release unit's rating not exceeded, no fibre on the seab
 
 ``AnchorPlan-v1`` judges its installations itself (``info["success"]``, :mod:`moor_env.envs.plan_outcome`: the
 site's required speed, the offset and the chain pile-up included); :func:`episode_success` and
-:func:`agents.evaluate.run_episode` take its verdict.
+:func:`agents.episodes.run_episode` take its verdict.
 """
 
 from __future__ import annotations

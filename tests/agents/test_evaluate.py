@@ -15,11 +15,11 @@ from agents.evaluate import (
     evaluate_policy,
     main,
     markdown_table,
-    success_of,
     t_interval,
     write_report,
 )
 from agents.scenarios import save_scenarios
+from agents.success import success_of
 
 
 @pytest.mark.parametrize(("speed", "tilt", "terms", "ok"), [
