@@ -122,6 +122,16 @@ def discrete_hang(dx, dz, h0, va0, node_w, seg_l0, seg_ea, out):
 
 
 @jit
+def _side_segment(i, t, toward_a, v, node_w):
+    """Step i of a walk from touchdown node t toward end A or end B: the segment's index and the vertical force
+    it carries, ``v`` being the force the step before carried (the first segment's force for i = 0)."""
+    k = t - 1 - i if toward_a else t + i
+    if i > 0:
+        v += node_w[k + 1] if toward_a else node_w[k]
+    return k, v
+
+
+@jit
 def _side_walk(h, v1, t, toward_a, node_w, seg_l0, seg_ea):
     """Walk from touchdown node t toward end A (node 0) or end B (node n), the segment leaving t carrying the
     vertical force v1: returns the span (x, z) and its derivatives (dx/dv1, dz/dv1, dx/dH, dz/dH)."""
@@ -135,9 +145,7 @@ def _side_walk(h, v1, t, toward_a, node_w, seg_l0, seg_ea):
     v = v1
     count = t if toward_a else n - t
     for i in range(count):
-        k = t - 1 - i if toward_a else t + i
-        if i > 0:
-            v += node_w[k + 1] if toward_a else node_w[k]
+        k, v = _side_segment(i, t, toward_a, v, node_w)
         tension = math.sqrt(h * h + v * v)
         l0 = seg_l0[k]
         inv_ea = 1.0 / seg_ea[k]
@@ -285,9 +293,7 @@ def _place_side(h, v1, t, toward_a, x_td, z_td, node_w, seg_l0, seg_ea, out):
     v = v1
     count = t if toward_a else n - t
     for i in range(count):
-        k = t - 1 - i if toward_a else t + i
-        if i > 0:
-            v += node_w[k + 1] if toward_a else node_w[k]
+        k, v = _side_segment(i, t, toward_a, v, node_w)
         tension = math.sqrt(h * h + v * v)
         stretched = seg_l0[k] * (1.0 + tension / seg_ea[k])
         x += stretched * h / tension
