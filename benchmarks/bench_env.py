@@ -1,32 +1,29 @@
-"""Benchmark: AnchorRelease-v0 steps and episodes per second, single env, async vector env and batched env
-(threads in one process, and worker processes).
+"""Benchmark: AnchorRelease-v0 steps and episodes per second, single env, async vector env and batched env (threads in
+one process, and worker processes).
 
-Run from the repository root: ``python benchmarks/bench_env.py [--episodes 3] [--repeats 3] [--quick]``.
-Every env runs the default config (``configs/envs/anchor-release.yaml``: the ``fast`` fidelity preset, 1 s
-control steps, the pre-release phase integrated with ``control.pre_release_dt_s``) on the default scene's
-geometry (gjoa-500:
-depth 500 m, spacing 0.1 h, line 1.08 h, no current) with the sea state drawn from the config (Hs 0-3 m, so
-most resets simulate the 20 s wave warm-up). The policy holds the vessels for 59 steps and releases on the 60th,
-so one episode is 59 s of pre-release control plus the fall to touchdown, after the reset's warm-up. The
-equilibrium is solved before timing starts (it is cached). With waves the env runs the `fast` preset's
-tight_line resolution with its ``in_waves`` keys (1 m loop chain) throughout. A second
-variant (``calm default scene``) keeps the bundled gjoa-500 scene as it is, without waves (Hs 0, no warm-up): its
-slack loop hangs and falls on the coarse resolution. A third runs the pre-release phase at the scene's own step
-(``control.pre_release_dt_s`` and ``pre_release_dt_calm_s`` null) for comparison. The ``fresh geometry``
-variant (single env, calm water, no current) draws every episode's geometry from the config's ranges (depth,
-spacing, line length, anchor mass), so every reset solves a new equilibrium on a newly compiled model; it
-records the reset and whole-episode times (median) and where the time goes. ``--variant NAME`` runs one variant
-and merges its rows into the committed JSON (the other rows keep their numbers).
+Run from the repository root: ``python benchmarks/bench_env.py [--episodes 3] [--repeats 3] [--quick]``. Every env
+runs the default config (``configs/envs/anchor-release.yaml``: the ``fast`` fidelity preset, 1 s control steps, the
+pre-release phase integrated with ``control.pre_release_dt_s``) on the default scene's geometry (gjoa-500: depth
+500 m, spacing 0.1 h, line 1.08 h, no current) with the sea state drawn from the config (Hs 0-3 m, so most resets
+simulate the 20 s wave warm-up). The policy holds the vessels for 59 steps and releases on the 60th, so one episode
+is 59 s of pre-release control plus the fall to touchdown, after the reset's warm-up. The equilibrium is solved
+before timing starts (it is cached). With waves the env runs the `fast` preset's tight_line resolution with its
+``in_waves`` keys (1 m loop chain) throughout. A second variant (``calm default scene``) keeps the bundled gjoa-500
+scene as it is, without waves (Hs 0, no warm-up): its slack loop hangs and falls on the coarse resolution. A third
+runs the pre-release phase at the scene's own step (``control.pre_release_dt_s`` and ``pre_release_dt_calm_s`` null)
+for comparison. The ``fresh geometry`` variant (single env, calm water, no current) draws every episode's geometry
+from the config's ranges (depth, spacing, line length, anchor mass), so every reset solves a new equilibrium on a
+newly compiled model; it records the reset and whole-episode times (median) and where the time goes.
+``--variant NAME`` runs one variant and merges its rows into the committed JSON (the other rows keep their numbers).
 
-Measured for each env: wall time, CPU time of every process involved (``/proc`` for worker processes),
-transitions (env steps that are not autoresets) and episodes per second, per second per core used.
-Every row runs ``--repeats`` times, round robin, and the table shows each row's median round (all rounds are in
-the JSON): on this shared machine one row's rate moves by tens of percent between minutes. The batched over
-async ratio is given both ways: best median row over best median row, and within each round (rows a minute
-apart, so both see the same minute of the machine), with the spread of the rounds.
-Writes ``benchmarks/results/bench_env.json``, its table in ``docs/env-speed.md`` and the README's headline line
-(``--docs-only``: only those, from the committed JSON). The machine is shared;
-the 1-minute load average before and after is recorded with the results.
+Measured for each env: wall time, CPU time of every process involved (``/proc`` for worker processes), transitions
+(env steps that are not autoresets) and episodes per second, per second per core used. Every row runs ``--repeats``
+times, round robin, and the table shows each row's median round (all rounds are in the JSON): on this shared machine
+one row's rate moves by tens of percent between minutes. The batched over async ratio is given both ways: best
+median row over best median row, and within each round (rows a minute apart, so both see the same minute of the
+machine), with the spread of the rounds. Writes ``benchmarks/results/bench_env.json``, its table in
+``docs/env-speed.md`` and the README's headline line (``--docs-only``: only those, from the committed JSON). The
+1-minute load average before and after is recorded with the results.
 """
 
 from __future__ import annotations
@@ -349,18 +346,13 @@ def main(argv: list[str] | None = None) -> dict:
     for round_index in range(max(1, args.repeats)):
         rows = []
         for label, overrides in variants:
-            runs = [lambda o=overrides: bench_single(SINGLE_EPISODES_FACTOR * episodes, o),
-                    lambda o=overrides: bench_async(2, episodes, o),
-                    lambda o=overrides: bench_async(8, episodes, o),
-                    lambda o=overrides: bench_batched(2, episodes, 2, o),
-                    lambda o=overrides: bench_batched(8, episodes, 2, o),
-                    lambda o=overrides: bench_batched(16, episodes, 2, o),
-                    lambda o=overrides: bench_batched(32, episodes, 2, o),
-                    lambda o=overrides: bench_batched(8, episodes, 1, o),
-                    lambda o=overrides: bench_workers(16, episodes, 2, o),
-                    lambda o=overrides: bench_workers(32, episodes, 2, o)]
-            for run in runs:
-                rows.append({"variant": label, "round": round_index, **_rates(run())})
+            # (bench, its arguments before the overrides): envs, episodes per env, threads or worker processes
+            runs = [(bench_single, SINGLE_EPISODES_FACTOR * episodes), (bench_async, 2, episodes),
+                    (bench_async, 8, episodes), (bench_batched, 2, episodes, 2), (bench_batched, 8, episodes, 2),
+                    (bench_batched, 16, episodes, 2), (bench_batched, 32, episodes, 2), (bench_batched, 8, episodes, 1),
+                    (bench_workers, 16, episodes, 2), (bench_workers, 32, episodes, 2)]
+            for bench, *bench_args in runs:
+                rows.append({"variant": label, "round": round_index, **_rates(bench(*bench_args, overrides))})
                 print(rows[-1], flush=True)
         rounds.append(rows)
     # the machine is shared and its speed drifts by tens of percent over minutes: each row's median round
@@ -396,25 +388,11 @@ def main(argv: list[str] | None = None) -> dict:
         result["fresh_geometry"] = previous["fresh_geometry"]
     RESULTS.parent.mkdir(parents=True, exist_ok=True)
     RESULTS.write_text(json.dumps(result, indent=2))
-    write_blocks(docs_blocks(result))
+    blocks = docs_blocks(result)
+    write_blocks(blocks)
     print(f"\nwritten {RESULTS.relative_to(ROOT)}; {result['machine']}; load {load_before:.2f} -> "
           f"{result['load_average_1min']['after']:.2f}\n")
-    print("| variant | env | envs | threads/procs | transitions/s | episodes/s | episodes/s/core | CPU s/episode | "
-          "CPU ms/transition | kernel share |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
-    for r in rows:
-        share = f"{r['kernel_share_of_cpu']:.0%}" if "kernel_share_of_cpu" in r else "-"
-        procs = f"{r['workers']} procs" if "workers" in r else r.get("threads", r["cores"])
-        print(f"| {r['variant']} | {r['env']} | {r['num_envs']} | {procs} | "
-              f"{r['transitions_per_s']:.1f} | {r['episodes_per_s']:.3f} | {r['episodes_per_s_per_core']:.3f} | "
-              f"{r['cpu_s_per_episode']:.3f} | {r['cpu_ms_per_transition']:.3f} | {share} |")
-    for label, ratio in ratios.items():
-        b = bounds[label]
-        r = result["batched_over_async_within_rounds"][label]
-        print(f"batched / async transitions per second, {label}: {ratio:.2f} (within each round: "
-              f"{', '.join(f'{x:.2f}' for x in r['per_round'])}; bound with free Python and IPC: "
-              f"{b['async_cpu_ms_per_transition']:.3f} / {b['single_kernel_ms_per_transition']:.3f} ms = "
-              f"{b['batched_over_async_upper_bound']:.2f})")
+    print(blocks[0][2])  # the table and the batched/async ratios as docs/env-speed.md shows them
     return result
 
 

@@ -20,10 +20,10 @@ Four cases of gjoa-500 with implicit lines on meshes set explicitly (the ``fast`
 - ``fall_fast_after_waves``: the fall on the coarse mesh after the ``hanging_waves`` phase (which is not timed
   here): a fall that tilts, so that its outputs check more of the kernel.
 
-Each case restarts from a copy of its equilibrium state and times ``Simulator.advance_to`` alone (plain wall
-time on a shared machine: the load average is recorded; the minimum and median of ``--rounds`` x ``--repeats``
-runs are reported). The outputs (touchdown speed and tilt, and a hash of the final state) are recorded so that a change
-of the kernel can be checked to leave the results unchanged (bit for bit where the hash matches).
+Each case restarts from a copy of its equilibrium state and times ``Simulator.advance_to`` alone (plain wall time on
+a shared machine: the load average is recorded; the minimum and median of ``--rounds`` x ``--repeats`` runs are
+reported). The outputs (touchdown speed and tilt, and a hash of the final state) are recorded so that a change of
+the kernel can be checked to leave the results unchanged (bit for bit where the hash matches).
 
 The breakdown times each piece of one implicit step in a jitted loop at a fixed state taken from the case
 (loads ``compute_loads``; a rebuild of the elimination order, which a step pays only after a topology change or
@@ -209,24 +209,23 @@ def piece_costs(case: Case) -> dict:
     k = PIECE_LOOPS
     _loop_loads(1, *records)
     out = {"loads_us": _time_loop(_loop_loads, k, *records) / k * 1e6}
-    saved = [a.copy() for a in (w.node_force, w.node_mm, w.node_mass, w.node_contact, w.node_acc, w.seg_tension,
-                                w.body_acc)]
+    # what a solve leaves changed: restored before each stage's loop so that every stage starts from this state
+    scratch = (w.node_force, w.node_mm, w.node_mass, w.node_contact, w.node_acc, w.seg_tension, w.body_acc)
+    saved = [a.copy() for a in scratch]
     _loop_order(1, *records)
     out["order_rebuild_us"] = _time_loop(_loop_order, k, *records) / k * 1e6
     stage_us = []
     for stage in range(3):
-        for arr, s in zip((w.node_force, w.node_mm, w.node_mass, w.node_contact, w.node_acc, w.seg_tension,
-                           w.body_acc), saved, strict=True):
+        for arr, s in zip(scratch, saved, strict=True):
             arr[...] = s
         _loop_solve(1, stage, sim.dt, *records)
         stage_us.append(_time_loop(_loop_solve, k, stage, sim.dt, *records) / k * 1e6)
     out["assemble_us"] = stage_us[0]
     out["eliminate_back_substitute_us"] = stage_us[1] - stage_us[0]
     out["update_active_set_us"] = stage_us[2] - stage_us[1]
-    out["n_nodes_slots"] = int(st.node_i.shape[0])
-    out["n_segment_slots"] = int(st.seg_i.shape[0])
-    out["n_active_segments"] = int(np.sum(st.seg_i[:, L.SI_ACTIVE]))
-    out["n_free_nodes"] = int(np.sum(st.node_i[:, L.NI_KIND] == L.NODE_FREE))
+    out.update(n_nodes_slots=int(st.node_i.shape[0]), n_segment_slots=int(st.seg_i.shape[0]),
+               n_active_segments=int(np.sum(st.seg_i[:, L.SI_ACTIVE])),
+               n_free_nodes=int(np.sum(st.node_i[:, L.NI_KIND] == L.NODE_FREE)))
     return out
 
 
@@ -362,10 +361,10 @@ def main() -> None:
     bar = tqdm(total=len(cases) * args.repeats * args.rounds, desc="timed runs", leave=False)
     walls = {case.name: [] for case in cases}
     baseline = []
+    baseline_out = [args.out.with_name(args.out.stem + f"_baseline_{k}.json") for k in range(args.rounds)]
     for k in range(args.rounds):
         if args.baseline_root is not None:
-            baseline.append(run_baseline(args.baseline_root, args.repeats,
-                                         args.out.with_name(args.out.stem + f"_baseline_{k}.json")))
+            baseline.append(run_baseline(args.baseline_root, args.repeats, baseline_out[k]))
         round_walls, steps = time_rounds(cases, args.repeats, bar)
         for name, w in round_walls.items():
             walls[name] += w
@@ -385,23 +384,15 @@ def main() -> None:
     if baseline:
         out["baseline"] = {"label": args.baseline_label}  # where the other tree lay on that machine means nothing here
         out["against_baseline"] = compare(results, baseline)
-        for k in range(args.rounds):
-            args.out.with_name(args.out.stem + f"_baseline_{k}.json").unlink()
+        for path in baseline_out:
+            path.unlink()
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(out, indent=2) + "\n")
     if args.root is None and args.out.resolve() == RESULTS.resolve():
         write_blocks(docs_blocks(out))
     for name, r in results.items():
-        line = f"{name:22s} dt {r['dt_s'] * 1e3:6.2f} ms  {r['steps']:5d} steps  {r['us_per_step_min']:6.2f} us/step " \
-               f"(median {r['us_per_step_median']:6.2f})  {r['outputs']}"
-        print(line)
-        if "pieces_us" in r:
-            print("   pieces:", {k: round(v, 2) for k, v in r["pieces_us"].items()})
-            print("   solves:", r["active_set_solves"])
-        if baseline:
-            c = out["against_baseline"][name]
-            print(f"   baseline {c['baseline_us_per_step_min']:6.2f} us/step, ratio {c['ratio']:.3f}, same bits "
-                  f"{c['same_state_bits']}, output changes {c['output_relative_change']}")
+        print(f"{name:22s} {r['outputs']}", f"baseline: {out['against_baseline'][name]}" if baseline else "")
+    print("\n\n".join(text for _, _, text in docs_blocks(out)))  # the tables as docs/implicit-step.md shows them
     print(f"load average {load_before:.2f} -> {out['load_average_1min']['after']:.2f}; wrote {args.out}")
 
 

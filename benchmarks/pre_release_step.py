@@ -34,6 +34,7 @@ from _machine import run_record, write_results  # noqa: E402
 
 import moor_env  # noqa: E402, F401 - registers the envs
 from moor_env.envs import core as envcore  # noqa: E402
+from moor_env.envs.resolution import even_step_s  # noqa: E402
 from moor_env.physics import layout as L  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results" / "pre_release_step.json"
@@ -56,8 +57,7 @@ class ReferenceVariants:
 
     def pre_release(self, t_end_s: float, phase: str) -> envcore.Advance:
         sim = self.core.sim
-        return envcore.Advance(t_end_s, False, phase, envcore._even_step(t_end_s - sim.state.t,
-                                                                          self.step_factor * sim.dt))
+        return envcore.Advance(t_end_s, False, phase, even_step_s(t_end_s - sim.state.t, self.step_factor * sim.dt))
 
     def begin_step(self, action):
         core = self.core

@@ -18,8 +18,9 @@ records change (``Simulator.records``: a new state object, new work arrays, new 
 
 After each scene's advance the kernel evaluates the loads and the lines' top tensions at the state reached
 (unless it blew up), so the observation's tensions (``Simulator.top_tensions_n``) need no second kernel call and
-that work runs on the batch's threads. An env slot also passes :class:`SlotBuffers`: the kernel then writes the
-quantities its observation reads (``M_*``, :func:`measure_scene`) and, where the advance asks for it, first copies
+that work runs on the batch's threads. An env slot also passes its
+:class:`~moor_env.envs.measures.SlotBuffers`: the kernel then writes the quantities its observation reads
+(``M_*``, :func:`~moor_env.envs.measures.measure_scene`) and, where the advance asks for it, first copies
 the state into a backup (the env repeats a diverged coarse pre-release advance from it). Done in Python on every
 env step they cost a numpy copy of nine arrays and a dozen small kernel and numpy calls; done here (and with the
 observations normalised for all slots at once) the batched env's Python per slot and step is about 48 us rather
@@ -40,7 +41,6 @@ disjoint groups of scenes of about equal cost (:func:`balanced_groups`; one numb
 
 from __future__ import annotations
 
-import math
 import time
 import weakref
 from collections import namedtuple
@@ -49,17 +49,15 @@ from concurrent.futures import ThreadPoolExecutor
 import numba
 import numpy as np
 
+from moor_env.envs.measures import N_SPEC, SlotBuffers, measure_scene
 from moor_env.errors import SimulationDiverged
 from moor_env.physics import layout as L
-from moor_env.physics.anchor import tilt_deg
-from moor_env.physics.environment import current_velocity
 from moor_env.physics.integrate import advance
 from moor_env.physics.line import top_tensions
 from moor_env.physics.loads import compute_accelerations
 from moor_env.physics.record_table import N_TABLE_COLUMNS, copy_rows, record_from_table, table_rows
 from moor_env.physics.records import F8, I8, MODEL_FIELDS, STATE_FIELDS, STATE_NAMES, Field, ModelRecord, StateRecord
-from moor_env.physics.vessels import track_state
-from moor_env.simulator import SimState, Simulator
+from moor_env.simulator import Simulator
 
 SlotRecord = namedtuple("SlotRecord", ["measures", "measure_spec"])
 SlotRecord.__doc__ = "An env slot's arrays for the kernel: its measures (``M_*``) and what to measure (``SPEC_*``)."
@@ -74,92 +72,6 @@ N_ROWS = ROW_BACKUP + len(STATE_FIELDS)
 IN_T, IN_T_END, IN_DT, IN_INTEGRATOR, IN_DETECT, IN_BACKUP = range(6)
 N_IN = 6
 OUT_STATUS, OUT_STEPS, OUT_FAIL_KIND, OUT_FAIL_INDEX = range(4)
-
-# what the kernel measures after an advance for an env slot's observation (``SlotBuffers.measures``)
-M_TILT_DEG = 0  # anchor axis from vertical, tip down [deg]
-M_AXIS_RATE_DEG_S = 1  # angular speed of the axis (spin about it left out) [deg/s]
-M_HEAVE_M = 2  # installation vessel z [m]
-M_HEAVE_RATE_M_S = 3
-M_CURRENT_X_M_S = 4  # surface current
-M_CURRENT_Y_M_S = 5
-M_TIP_Z_M = 6
-M_LOOP_Z_M = 7  # lowest node of the summarised line (inf if it has no active segment)
-M_FIBRE_Z_M = 8  # lowest node on its segments of the summarised material (inf if none)
-M_LINE_L0_M = 9  # unstretched length of its active segments
-M_RELEASE_POS = 10  # 3: release node position [m]
-M_RELEASE_VEL = 13  # 3 [m/s]
-M_WIRE_TENSION_N = 16  # top tension of the spec's wire line (0 if none)
-M_LINE_TENSION_N = 17  # top tension of the summarised line (0 if none)
-N_MEASURES = 18
-# measure_spec entries (-1: none)
-SPEC_RELEASE_NODE, SPEC_LINE, SPEC_MATERIAL, SPEC_WIRE, SPEC_VESSEL = range(5)
-N_SPEC = 5
-
-
-@numba.njit(cache=True, nogil=True)
-def line_summary(node_pos, seg_i, seg_f, line_i, line, material):
-    """Over the active segments of ``line``: the lowest node z, the lowest z of nodes on segments of
-    ``material`` (inf if none) and the total unstretched length [m].
-
-    One pass in a kernel because the observation needs it every step (numpy masks over the segment table cost
-    more than the rest of the observation).
-    """
-    start = line_i[line, L.LI_SEG_START]
-    z_min = math.inf
-    z_mat = math.inf
-    length = 0.0
-    for s in range(start, start + line_i[line, L.LI_SEG_CAP]):
-        if seg_i[s, L.SI_ACTIVE] != 1 or seg_i[s, L.SI_LINE] != line:
-            continue
-        z = min(node_pos[seg_i[s, L.SI_A], 2], node_pos[seg_i[s, L.SI_B], 2])
-        z_min = min(z_min, z)
-        if seg_i[s, L.SI_MAT] == material:
-            z_mat = min(z_mat, z)
-        length += seg_f[s, L.SF_L0]
-    return z_min, z_mat, length
-
-
-@numba.njit(cache=True, nogil=True)
-def measure_scene(model, state, t, spec, out):
-    """The ``M_*`` quantities of a scene at time ``t`` [s] into ``out`` (the lines' top tensions
-    ``state.top_tension`` [N] already evaluated at this state); ``spec`` names the release node, the line and
-    material to summarise, the wire line and the vessel whose heave is read (``SPEC_*``, -1: none)."""
-    env_f, node_pos, node_vel = model.env_f, state.node_pos, state.node_vel
-    body_state, top_tension = state.body_state, state.top_tension
-    ex = body_state[L.BS_AXIS]
-    ey = body_state[L.BS_AXIS + 1]
-    ez = body_state[L.BS_AXIS + 2]
-    wx = body_state[L.BS_OMEGA]
-    wy = body_state[L.BS_OMEGA + 1]
-    wz = body_state[L.BS_OMEGA + 2]
-    w_axial = wx * ex + wy * ey + wz * ez
-    out[M_TILT_DEG] = tilt_deg(ez)
-    out[M_AXIS_RATE_DEG_S] = math.degrees(math.sqrt((wx - w_axial * ex) ** 2 + (wy - w_axial * ey) ** 2
-                                                    + (wz - w_axial * ez) ** 2))
-    out[M_HEAVE_M] = out[M_HEAVE_RATE_M_S] = 0.0
-    if spec[SPEC_VESSEL] >= 0:
-        _, _, hz, _, _, hvz = track_state(model.tracks, spec[SPEC_VESSEL], t, env_f)
-        out[M_HEAVE_M] = hz
-        out[M_HEAVE_RATE_M_S] = hvz
-    cx, cy, _ = current_velocity(0.0, env_f, model.current_profile)
-    out[M_CURRENT_X_M_S] = cx
-    out[M_CURRENT_Y_M_S] = cy
-    out[M_TIP_Z_M] = body_state[L.BS_POS + 2] + model.body_f[L.BF_S_TIP] * ez
-    out[M_LOOP_Z_M] = out[M_FIBRE_Z_M] = math.inf
-    out[M_LINE_L0_M] = out[M_LINE_TENSION_N] = 0.0
-    if spec[SPEC_LINE] >= 0:
-        loop_z, fibre_z, length = line_summary(node_pos, state.seg_i, state.seg_f, state.line_i, spec[SPEC_LINE],
-                                               spec[SPEC_MATERIAL])
-        out[M_LOOP_Z_M] = loop_z
-        out[M_FIBRE_Z_M] = fibre_z
-        out[M_LINE_L0_M] = length
-        out[M_LINE_TENSION_N] = top_tension[spec[SPEC_LINE]]
-    out[M_WIRE_TENSION_N] = top_tension[spec[SPEC_WIRE]] if spec[SPEC_WIRE] >= 0 else 0.0
-    node = spec[SPEC_RELEASE_NODE]
-    for c in range(3):
-        out[M_RELEASE_POS + c] = node_pos[node, c] if node >= 0 else 0.0
-        out[M_RELEASE_VEL + c] = node_vel[node, c] if node >= 0 else 0.0
-
 
 @numba.njit(cache=True, nogil=True)
 def advance_many(scalars, addresses, out_i, out_t):
@@ -198,52 +110,6 @@ def advance_many(scalars, addresses, out_i, out_t):
         out_i[i, OUT_FAIL_KIND] = fail_kind
         out_i[i, OUT_FAIL_INDEX] = fail_index
         out_t[i] = t_reached
-
-
-class SlotBuffers:
-    """An env slot's arrays for the batch kernel besides its simulator's.
-
-    Parameters
-    ----------
-    spec : sequence of int
-        What :func:`measure_scene` measures (``SPEC_*`` order: release node, line and material to summarise, wire
-        line, vessel; -1 for none).
-    state : SimState, optional
-        A state of the simulation's shapes: the backup's buffers are made like it (needed for an advance with
-        ``take_backup``).
-
-    Attributes
-    ----------
-    measures : ndarray (N_MEASURES,)
-        The ``M_*`` quantities the kernel measured after the last advance that did not blow up.
-    record :
-        The simulator's loads record (``Simulator.loads_record``) the measures belong to: they are current while it
-        still is.
-    backup : SimState or None
-        The state before the last advance that took a backup (its ``t`` and ``released`` set by the caller).
-    """
-
-    __slots__ = ("spec", "measures", "record", "backup", "_values", "_values_record")
-
-    def __init__(self, spec, state: SimState | None = None) -> None:
-        self.spec = np.array(spec, dtype=np.int64).reshape(N_SPEC)
-        self.measures = np.full(N_MEASURES, np.nan)
-        self.record = None
-        self.backup = None if state is None else state.copy()
-        self._values: list[float] = []
-        self._values_record = None
-
-    def current_measures(self, sim: Simulator) -> list[float] | None:
-        """The measures as Python floats if they are of ``sim``'s current state (nothing changed it since the kernel
-        measured), else None. Converted once per advance (an env step reads them several times), so the list is shared:
-        read it, do not change it."""
-        record = self.record
-        if record is None or sim.loads_record() is not record:
-            return None
-        if self._values_record is not record:
-            self._values = self.measures.tolist()
-            self._values_record = record
-        return self._values
 
 
 _NO_SLOT = SlotRecord(np.zeros(0), np.zeros(0, dtype=np.int64))  # a job without SlotBuffers: nothing measured
@@ -368,8 +234,8 @@ class BatchAdvancer:
 
     def run(self, jobs: dict[int, tuple]) -> dict[int, tuple[int | None, SimulationDiverged | None]]:
         """Advance ``{slot: (simulator, t_end_s, detect_touchdown, dt_s[, slot_buffers, take_backup])}``: with
-        :class:`SlotBuffers` the kernel also measures the state reached and, with ``take_backup``, first copies the
-        state into the buffers' backup.
+        :class:`~moor_env.envs.measures.SlotBuffers` the kernel also measures the state reached and, with
+        ``take_backup``, first copies the state into the buffers' backup.
 
         Returns
         -------

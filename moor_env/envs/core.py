@@ -21,11 +21,12 @@ from typing import Any
 import numpy as np
 
 from moor_env.envs import actuators, measures
-from moor_env.envs.batch import BatchAdvancer, SlotBuffers
+from moor_env.envs.batch import BatchAdvancer
 from moor_env.envs.config import EnvConfig
 from moor_env.envs.equilibria import Equilibria
+from moor_env.envs.measures import SlotBuffers
 from moor_env.envs.observation import OBS_NAMES, normalise_observations, raw_observation
-from moor_env.envs.resolution import has_resolution, line_speed_m_s, pre_release_step_s, remesh_for_fall
+from moor_env.envs.resolution import even_step_s, has_resolution, line_speed_m_s, pre_release_step_s, remesh_for_fall
 from moor_env.envs.reward import (
     LIMITS,
     PHASE_CONTROL,
@@ -56,11 +57,6 @@ class Advance:
     def job(self, core: InstallationCore) -> tuple:
         """This advance as a :class:`~moor_env.envs.batch.BatchAdvancer` job of ``core``'s simulator."""
         return core.sim, self.t_end_s, self.detect_touchdown, self.dt_s, core.buffers, self.backup
-
-
-def _even_step(span_s: float, max_step_s: float) -> float:
-    """``span_s`` / n for the smallest whole n that keeps the step at or below ``max_step_s``."""
-    return span_s / max(1, math.ceil(span_s / max_step_s - 1e-9))
 
 
 class InstallationCore:
@@ -182,7 +178,7 @@ class InstallationCore:
         saves the state for :meth:`fallback` (``Advance.backup``)."""
         sim = self.sim
         target = pre_release_step_s(sim, self.hs, self.cfg.control)
-        adv = Advance(t_end_s, False, phase, _even_step(t_end_s - sim.state.t, target))
+        adv = Advance(t_end_s, False, phase, even_step_s(t_end_s - sim.state.t, target))
         if adv.dt_s > sim.dt:
             adv.backup = True
             backup = self.buffers.backup
@@ -203,7 +199,7 @@ class InstallationCore:
         self.sim.state, self.buffers.backup = self.buffers.backup, self.sim.state
         self.fallbacks += 1
         self.pending = Advance(adv.t_end_s, adv.detect_touchdown, adv.phase,
-                               _even_step(adv.t_end_s - self.sim.state.t, self.sim.dt))
+                               even_step_s(adv.t_end_s - self.sim.state.t, self.sim.dt))
         return self.pending
 
     # --- steps -------------------------------------------------------------------------------------------------

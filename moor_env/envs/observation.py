@@ -1,7 +1,7 @@
 """The observation: 27 physical quantities, normalised and clipped (:data:`OBS_SPEC`).
 
 :func:`raw_observation` assembles the vector in physical units from the batch kernel's measures of the state
-(:func:`moor_env.envs.batch.measure_scene`) and the slot's own bookkeeping; :func:`normalise_observations` turns
+(:func:`moor_env.envs.measures.measure_scene`) and the slot's own bookkeeping; :func:`normalise_observations` turns
 rows of them into what the agent sees.
 """
 
@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from moor_env.envs import batch as B
+from moor_env.envs import measures as M
 
 # --- observation: (name, unit, offset, scale, meaning); normalised value = (raw - offset) / scale ----------------
 OBS_SPEC: tuple[tuple[str, str, float, float, str], ...] = (
@@ -65,36 +65,36 @@ def raw_observation(m: list[float], *, time_fraction: float, released: bool, spa
                     spacing_rate_m_s: float, payout_rate_m_s: float, depth_m: float, vertical_chain_m: float,
                     fairlead_depth_m: float, release_ref: np.ndarray, hs_m: float, tp_s: float) -> list[float]:
     """Observation in physical units (see :data:`OBS_SPEC`) from the kernel's measures ``m`` (``M_*`` of
-    :mod:`moor_env.envs.batch`) and the slot's own state: the applied rates, the scenario's depth, vertical
+    :mod:`moor_env.envs.measures`) and the slot's own state: the applied rates, the scenario's depth, vertical
     chain, fairlead depth and sea state, and the release node's position at the start (``release_ref``).
 
     Python floats: it runs every step, where small numpy operations cost more than the arithmetic.
     """
-    fibre = m[B.M_FIBRE_Z_M] + depth_m
-    loop_bottom = m[B.M_LOOP_Z_M] + depth_m
+    fibre = m[M.M_FIBRE_Z_M] + depth_m
+    loop_bottom = m[M.M_LOOP_Z_M] + depth_m
     return [
         time_fraction,
         1.0 if released else 0.0,
         spacing_m,
         spacing_rate_m_s,
-        (m[B.M_LINE_L0_M] + vertical_chain_m) / depth_m,
+        (m[M.M_LINE_L0_M] + vertical_chain_m) / depth_m,
         payout_rate_m_s,
-        m[B.M_RELEASE_POS] - release_ref[0],
-        m[B.M_RELEASE_POS + 1] - release_ref[1],
-        m[B.M_RELEASE_POS + 2] - release_ref[2],
-        m[B.M_RELEASE_VEL],
-        m[B.M_RELEASE_VEL + 1],
-        m[B.M_RELEASE_VEL + 2],
-        m[B.M_TILT_DEG],
-        m[B.M_AXIS_RATE_DEG_S],
-        m[B.M_WIRE_TENSION_N] / 1e6,
-        m[B.M_LINE_TENSION_N] / 1e6,
-        m[B.M_HEAVE_M] + fairlead_depth_m,
-        m[B.M_HEAVE_RATE_M_S],
-        m[B.M_CURRENT_X_M_S],
-        m[B.M_CURRENT_Y_M_S],
+        m[M.M_RELEASE_POS] - release_ref[0],
+        m[M.M_RELEASE_POS + 1] - release_ref[1],
+        m[M.M_RELEASE_POS + 2] - release_ref[2],
+        m[M.M_RELEASE_VEL],
+        m[M.M_RELEASE_VEL + 1],
+        m[M.M_RELEASE_VEL + 2],
+        m[M.M_TILT_DEG],
+        m[M.M_AXIS_RATE_DEG_S],
+        m[M.M_WIRE_TENSION_N] / 1e6,
+        m[M.M_LINE_TENSION_N] / 1e6,
+        m[M.M_HEAVE_M] + fairlead_depth_m,
+        m[M.M_HEAVE_RATE_M_S],
+        m[M.M_CURRENT_X_M_S],
+        m[M.M_CURRENT_Y_M_S],
         depth_m,
-        m[B.M_TIP_Z_M] + depth_m,
+        m[M.M_TIP_Z_M] + depth_m,
         loop_bottom if math.isfinite(loop_bottom) else 0.0,
         fibre if math.isfinite(fibre) else 1000.0,
         hs_m,

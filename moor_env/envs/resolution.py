@@ -141,3 +141,9 @@ def pre_release_step_s(sim: Simulator, hs_m: float, cfg: ControlConfig) -> float
     if sim.integrator_code == INTEGRATOR_IMPLICIT_EULER and step is not None:
         target = max(step, sim.dt)
     return target
+
+
+def even_step_s(span_s: float, max_step_s: float) -> float:
+    """``span_s`` / n [s] for the smallest whole n that keeps the step at or below ``max_step_s``: an advance of
+    ``span_s`` in steps of it ends exactly at its end time."""
+    return span_s / max(1, math.ceil(span_s / max_step_s - 1e-9))

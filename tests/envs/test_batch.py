@@ -75,7 +75,7 @@ def test_new_tracks_are_read_on_every_call(hanging_sim):
 def test_backup_holds_the_state_before_the_advance(hanging_sim):
     """With ``take_backup`` the kernel copies the state before advancing (reference: a copy taken in Python,
     equal bit for bit); the state itself moves on."""
-    from moor_env.envs.batch import SlotBuffers
+    from moor_env.envs.measures import SlotBuffers
     from moor_env.simulation import STATE_ARRAY_FIELDS
 
     sim = hanging_sim
@@ -91,7 +91,7 @@ def test_backup_holds_the_state_before_the_advance(hanging_sim):
 
 
 def test_backup_needs_buffers_with_a_backup_state(hanging_sim):
-    from moor_env.envs.batch import SlotBuffers
+    from moor_env.envs.measures import SlotBuffers
 
     sim = hanging_sim
     for buffers in (None, SlotBuffers([-1] * 5)):
@@ -100,14 +100,14 @@ def test_backup_needs_buffers_with_a_backup_state(hanging_sim):
 
 
 def test_kernel_measures_equal_the_simulator_quantities(tiny):
-    """The observation's measures from the kernel (``moor_env.envs.batch.measure_scene`` after an advance)
+    """The observation's measures from the kernel (``moor_env.envs.measures.measure_scene`` after an advance)
     against the same quantities from the Simulator's own methods and the physics functions, after a step in
     waves with spacing and winch moves. Reference: those functions; tolerance 1e-9 relative (the kernel may
     contract floating-point operations differently)."""
     import gymnasium as gym
 
-    from moor_env.envs import batch as B
-    from moor_env.envs.batch import line_summary
+    from moor_env.envs import measures as M
+    from moor_env.envs.measures import line_summary
     from moor_env.physics.environment import current_velocity
     from moor_env.physics.vessels import track_state
 
@@ -127,14 +127,14 @@ def test_kernel_measures_equal_the_simulator_quantities(tiny):
     e = st.body_state[6:9]
     w = st.body_state[9:12]
     expected = {
-        B.M_TILT_DEG: sim.tilt_deg(), B.M_AXIS_RATE_DEG_S: np.degrees(np.linalg.norm(w - (w @ e) * e)),
-        B.M_HEAVE_M: hz, B.M_HEAVE_RATE_M_S: hvz, B.M_CURRENT_X_M_S: cx, B.M_CURRENT_Y_M_S: cy,
-        B.M_TIP_Z_M: sim.tip_state()[0][2], B.M_LOOP_Z_M: loop_z, B.M_FIBRE_Z_M: fibre_z, B.M_LINE_L0_M: length,
-        B.M_WIRE_TENSION_N: tensions["wire"], B.M_LINE_TENSION_N: tensions["mooring_line"],
-        **{B.M_RELEASE_POS + c: st.node_pos[sim.model.release_node, c] for c in range(3)},
-        **{B.M_RELEASE_VEL + c: st.node_vel[sim.model.release_node, c] for c in range(3)},
+        M.M_TILT_DEG: sim.tilt_deg(), M.M_AXIS_RATE_DEG_S: np.degrees(np.linalg.norm(w - (w @ e) * e)),
+        M.M_HEAVE_M: hz, M.M_HEAVE_RATE_M_S: hvz, M.M_CURRENT_X_M_S: cx, M.M_CURRENT_Y_M_S: cy,
+        M.M_TIP_Z_M: sim.tip_state()[0][2], M.M_LOOP_Z_M: loop_z, M.M_FIBRE_Z_M: fibre_z, M.M_LINE_L0_M: length,
+        M.M_WIRE_TENSION_N: tensions["wire"], M.M_LINE_TENSION_N: tensions["mooring_line"],
+        **{M.M_RELEASE_POS + c: st.node_pos[sim.model.release_node, c] for c in range(3)},
+        **{M.M_RELEASE_VEL + c: st.node_vel[sim.model.release_node, c] for c in range(3)},
     }
-    assert sorted(expected) == list(range(B.N_MEASURES))
+    assert sorted(expected) == list(range(M.N_MEASURES))
     assert abs(cx) > 0.01 and abs(hz + core.fairlead_depth_m) > 1e-5  # current and waves (small here) are exercised
     for index, value in expected.items():
         assert measured[index] == pytest.approx(value, rel=1e-9, abs=1e-9), index

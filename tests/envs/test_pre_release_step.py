@@ -10,8 +10,8 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from moor_env.envs.batch import line_summary
 from moor_env.envs.core import InstallationCore, run_advance
+from moor_env.envs.measures import line_summary
 from moor_env.errors import SimulationDiverged
 from moor_env.physics import layout as L
 
