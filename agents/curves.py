@@ -76,7 +76,7 @@ def plot_learning_curves(curves: dict[str, dict[str, list[tuple[int, float]]]], 
     import matplotlib  # noqa: PLC0415 - matplotlib loads only to draw a figure
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # noqa: PLC0415
+    import matplotlib.pyplot as plt  # noqa: PLC0415 - matplotlib, after its backend is chosen
 
     fig, ax = plt.subplots(figsize=(7.5, 4.5))
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]

@@ -90,7 +90,7 @@ def render_episode(policy: Policy, scenario: dict[str, Any], path: str | Path, e
     import matplotlib  # noqa: PLC0415 - matplotlib loads only to draw a figure
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # noqa: PLC0415
+    import matplotlib.pyplot as plt  # noqa: PLC0415 - matplotlib, after its backend is chosen
 
     cfg = env_config if isinstance(env_config, EnvConfig) else load_env_config(env_config)
     env = gym.make(env_id, config=cfg, render_mode="rgb_array")

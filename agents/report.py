@@ -52,7 +52,7 @@ def plot_distributions(results: list[dict[str, Any]], path: str | Path, required
     import matplotlib  # noqa: PLC0415 - matplotlib loads only to draw a figure
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # noqa: PLC0415
+    import matplotlib.pyplot as plt  # noqa: PLC0415 - matplotlib, after its backend is chosen
 
     per_site = any(e.get("margins") is not None for r in results for e in r["episodes"])
     speed_key = "speed_over_required_m_s" if per_site else "touchdown_speed_m_s"

@@ -25,7 +25,7 @@ def check_plot_path(path: str | Path) -> Path:
         Naming ``--plot`` and the path when it is a directory, its directory does not exist or is not writable,
         the file exists and is not writable, or its suffix is not a figure type.
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: PLC0415 - matplotlib loads only with --plot
 
     suffixes = sorted("." + s for s in FigureCanvasAgg.get_supported_filetypes())
     path = Path(path)
@@ -53,10 +53,10 @@ def plot_drop(result: DropResult, path: str | Path, title: str = "") -> Path:
     title : str
         Figure title.
     """
-    import matplotlib
+    import matplotlib  # noqa: PLC0415 - matplotlib loads only to draw a figure
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # noqa: PLC0415 - matplotlib, after its backend is chosen
 
     fig = plt.figure(figsize=(12, 6.5), constrained_layout=True)
     grid = fig.add_gridspec(2, 2, width_ratios=[1.25, 1])

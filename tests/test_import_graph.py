@@ -171,3 +171,35 @@ def test_allow_list_entries_are_used():
     used = {(m, t) for (m, t) in ALLOWED
             if any(f and (target == t or target.startswith(t + ".")) for target, f, _ in IMPORTS.get(m, []))}
     assert used == set(ALLOWED), f"unused allow-list entries: {set(ALLOWED) - used}"
+
+
+def _comment_of(lines: list[str], line: int) -> str:
+    """The comments that speak for the import on ``line`` (1-based): on its own line, or on the lines just above
+    the group of imports it belongs to."""
+    text = lines[line - 1].partition("#")[2]
+    first = line - 1
+    while first > 0 and lines[first - 1].strip().startswith(("import ", "from ")):
+        first -= 1
+    above = first - 1
+    while above >= 0 and lines[above].strip().startswith("#"):
+        text += " " + lines[above].strip()
+        above -= 1
+    return text
+
+
+def test_function_level_imports_name_their_dependency_in_a_comment():
+    """Every import inside a function says in a comment which optional or heavy dependency it keeps out of the
+    module's import (the package's name: ``PIL`` as Pillow) or, for an allow-listed internal one, why."""
+    missing = []
+    for module, found in IMPORTS.items():
+        lines = FILES[module].read_text(encoding="utf-8").splitlines()
+        for target, in_function, line in found:
+            top = target.split(".")[0]
+            if not in_function:
+                continue
+            comment = _comment_of(lines, line)
+            names = {"PIL": ("Pillow", "PIL")}.get(top, (top,))
+            if not (any(name in comment for name in names) or (top in PACKAGES and comment.strip())):
+                missing.append(f"{FILES[module].relative_to(ROOT)}:{line} imports {target} without a comment "
+                               f"naming {names[0]}")
+    assert not missing, "\n".join(missing)

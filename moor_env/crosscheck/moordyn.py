@@ -79,7 +79,7 @@ def _quiet(log_path: Path):
 def _seed_state(md, state_path: Path, lines: list[MDLine], free_points: dict[int, np.ndarray],
                 n_bodies: int, n_rods: int, n_points: int) -> None:
     """Overwrite MoorDyn's saved state with our static positions (zero velocities) and load it back."""
-    import moordyn
+    import moordyn  # noqa: PLC0415 - moordyn (optional: the test and dev extras)
 
     moordyn.SaveState(md, str(state_path))
     raw = state_path.read_bytes()
@@ -171,7 +171,7 @@ def run_moordyn_drop(scene: str | Path | SceneConfig, dt_s: float | None = None,
     SimulationDiverged
         If MoorDyn reports a non-finite state.
     """
-    import moordyn
+    import moordyn  # noqa: PLC0415 - moordyn (optional: the test and dev extras)
 
     t_setup = time.perf_counter()
     cfg = scene if isinstance(scene, SceneConfig) else load_scene(scene, overrides)
