@@ -14,7 +14,7 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ValidationError
 
-from moor_env.errors import ConfigError, closest, did_you_mean
+from moor_env.errors import MISSING, ConfigError, closest, did_you_mean
 
 BOUND_ERRORS = ("greater_than", "less_than", "greater_than_equal", "less_than_equal")
 
@@ -106,11 +106,41 @@ def validation_error(root: type[BaseModel], exc: ValidationError, data: dict[str
         if missing:
             hint += ("; " if hint else "") + "required and missing: " + ", ".join(missing)
         return ConfigError(loc, value, "a key of " + (parent or "the scene") + ": " + ", ".join(names), hint)
+    if err["type"] == "missing":
+        field = field_at(root, list(err["loc"]))
+        allowed = _allowed(str(err["loc"][-1]), field) if field is not None else ""
+        return ConfigError(loc, MISSING, allowed or "a value", "a required key")
     if err["type"] == "literal_error" and isinstance(value, str):
         choices = re.findall(r"'([^']*)'", str((err.get("ctx") or {}).get("expected", "")))
         return ConfigError(loc, value, format_range(err), did_you_mean(value, choices))
     reason = "" if err["type"] in BOUND_ERRORS or err["type"].startswith(("float", "int", "bool")) else err["msg"]
     return ConfigError(loc or "scene", value, format_range(err), reason)
+
+
+def field_at(root: type[BaseModel], loc: list[Any]) -> Any:
+    """The pydantic field at the key path ``loc`` under ``root`` (through named entries and list items), or None
+    where the path leaves the models."""
+    kind: Any = ("model", root)
+    for part in loc[:-1]:
+        if kind is None:
+            return None
+        fields = kind[1].model_fields if kind[0] == "model" else None
+        if fields is not None and part not in fields:
+            return None
+        kind = field_kind(fields[part].annotation if fields is not None else kind[1])
+    if kind is None or kind[0] != "model":
+        return None
+    return kind[1].model_fields.get(loc[-1])
+
+
+def _allowed(name: str, field: Any) -> str:
+    """A field's allowed range with its unit, or its choices, in words ("" where it has neither)."""
+    unit, bounds = _unit_and_range(name, field)
+    if unit == "[choice]":
+        return "one of " + bounds.replace("|", ", ")
+    if bounds and unit not in ("[-]", "[integer]", "[name]"):
+        return f"{bounds} {unit[1:-1]}"
+    return bounds
 
 
 def format_range(err: dict[str, Any]) -> str:

@@ -10,6 +10,16 @@ import difflib
 from collections.abc import Iterable
 
 
+class _Missing:
+    """The value of a required key that is not given (:data:`MISSING`)."""
+
+    def __repr__(self) -> str:
+        return "(missing)"
+
+
+MISSING = _Missing()
+
+
 class MoorEnvError(Exception):
     """Base class of all errors raised by moor_env."""
 
@@ -22,7 +32,7 @@ class ConfigError(MoorEnvError, ValueError):
     key : str
         Dotted path of the setting, e.g. ``environment.water_depth_m``.
     value : object
-        The value that was given.
+        The value that was given; :data:`MISSING` for a required key that is not.
     allowed : str
         The allowed range or set, in words, e.g. ``> 0`` or ``10 .. 5000``.
     reason : str, optional

@@ -70,6 +70,13 @@ def test_typo_of_a_required_scene_key_names_the_unknown_key_and_the_close_one(tm
     assert "did you mean environment.water_depth_m? it is required and missing" in line
 
 
+def test_missing_required_scene_key_is_named_with_its_range(tmp_path, capsys, no_run):
+    path = tmp_path / "missing.yaml"
+    path.write_text("name: missing\nenvironment: {}\nanchor: {library: dpa_80t}\ninstallation: {}\n")
+    line = _error_line(capsys, ["static", str(path)])
+    assert line == "moor-env: error: environment.water_depth_m=(missing): allowed > 10 and <= 6000 m (a required key)"
+
+
 @pytest.mark.parametrize(("item", "words"), [
     ("water_dept_m=300", "water_dept_m=300: allowed a --set shortcut or a dotted path"),
     ("water_dept_m=300", "did you mean water_depth_m?"),

@@ -89,6 +89,23 @@ def test_unknown_scene_key_is_named_with_the_nearest_known_one():
     assert "did you mean installation.drop_height_m?" in str(info.value)
 
 
+@pytest.mark.parametrize(("section", "name", "key", "allowed"), [
+    ("environment", "water_depth_m", "environment.water_depth_m", "> 10 and <= 6000 m"),
+    ("materials", "mbl_n", "materials.chain_seed004.mbl_n", "> 0 and <= 1e+09"),
+    (None, "name", "name", "a value"),
+])
+def test_missing_required_key_is_named_with_its_range(section, name, key, allowed):
+    data = scene_dict("seed004-chain-500")
+    if section == "materials":
+        data["materials"]["chain_seed004"].pop(name)
+    else:
+        (data if section is None else data[section]).pop(name)
+    with pytest.raises(ConfigError) as info:
+        scene_from_dict(data)
+    assert info.value.key == key
+    assert str(info.value) == f"{key}=(missing): allowed {allowed} (a required key)"
+
+
 @pytest.mark.parametrize(("overrides", "key", "allowed"), [
     ({"drop_height_m": 437.0}, "installation.drop_height_m", "> 1 and <= 436.0 m"),
     ({"drop_height_m": 600.0}, "installation.drop_height_m", "> 1 and <= 436.0 m"),
