@@ -7,7 +7,8 @@ Run from the repository root (one command; a progress bar shows the runs)::
 
 What it does, per scene (``gjoa-500``; ``deep-1500``; ``wide`` = gjoa-500 with spacing 170 m and a 10 m vertical
 chain; ``snap`` = gjoa-500 with spacing 170 m, whose chain loop snaps taut before touchdown; ``current-waves`` =
-gjoa-500 with the seed 003 current, Hs 2 m and release after 20 s of waves):
+gjoa-500 with the current of seed 003, Landhaug 2015, *Dynamic Simulation of Dart Anchor Installation*, chapter 8,
+Hs 2 m and release after 20 s of waves):
 
 1. **Reference**: our explicit symplectic Euler at 0.9 of its stability limit on a ladder of uniformly refined
    chain segments c (fibre 5 c, wire 10 c); the finest level is the reference and the two finest levels are

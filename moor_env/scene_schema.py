@@ -173,7 +173,8 @@ class ComponentsConfig(_Strict):
 
 
 class InstallationConfig(_Strict):
-    """Geometry of a two-vessel dart-anchor installation (seed 003, Model 1/2), all in the x-z plane.
+    """Geometry of a two-vessel dart-anchor installation, all in the x-z plane (seed 003: Landhaug 2015,
+    *Dynamic Simulation of Dart Anchor Installation*, Models 1 and 2).
 
     The installation vessel (wire top) is at x = 0, the second vessel (mooring-line top) at
     x = ``vessel_spacing_m``. The bottom chain (``bottom_chain_length_m``) starts at the anchor's back tip:

@@ -62,7 +62,8 @@ def _adjust_to_drop_height(sim: Simulator, target_z: float) -> float:
 
 def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: bool = True,
                   method: str = "auto") -> StaticResult:
-    """Hanging equilibrium before release (seed 003 Model 1), drop height held at its set value.
+    """Hanging equilibrium before release, drop height held at its set value (seed 003: Landhaug 2015, *Dynamic
+    Simulation of Dart Anchor Installation*, Model 1).
 
     For an installation scene with a wire, the wire's unstretched length is corrected (at its top) until the
     anchor tip hangs ``drop_height_m`` above the seabed within ``tol_m``; without a wire, the held chain top

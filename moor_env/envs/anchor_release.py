@@ -38,22 +38,23 @@ class AnchorReleaseEnv(gym.Env):
 
     ## Description
 
-    An 80 t dart anchor (DPA, seed 003) hangs on the installation vessel's wire about 70 m above the seabed. Its
-    mooring line runs from the anchor's back tip up a vertical chain to the release node (where the wire's release
-    unit holds it), then down in a chain loop and up as fibre rope to a second vessel. Before the release the crew
-    sets the **spacing of the two vessels** and the **mooring-line payout** (together they shape the chain loop,
-    whose width/depth ratio governs the anchor's tilt) and chooses the **release time** (in waves the anchor heaves
-    on the long elastic wire). After the release the anchor falls freely and must hit the seabed fast (to
-    penetrate) and vertical (at most 5 deg tilt). Each step is ``control.interval_s`` of simulated time (default
-    1 s) of the numba lumped-mass model (:class:`moor_env.Simulator`) with waves, current, the wire and both
-    lines. A step whose release action is positive releases the anchor and simulates the fall to touchdown.
-    Before the release the implicit integrator steps ``control.pre_release_dt_s`` (0.2 s; waves of 7-13 s and
-    slow vessel moves; without waves ``control.pre_release_dt_calm_s``, 0.5 s), the fall at the scene's own step;
-    the accuracy of that trade is measured by ``benchmarks/pre_release_step.py`` (``--calm``). A calm scenario
-    with a slack loop runs on the fidelity preset's own resolution (``fast``: 2 m chain) and, at the release, moves
-    onto its ``tight_line`` resolution if the loop, at the spacing and line length of that moment, will be tight
-    at touchdown (``moor_env.remesh``); in waves, or with a loop tight from the start, ``tight_line`` runs
-    throughout (``benchmarks/remesh_at_release.py``), in waves with its ``in_waves`` keys (a 1 m loop chain,
+    An 80 t dart anchor (the DPA of seed 003, Landhaug 2015, *Dynamic Simulation of Dart Anchor Installation*,
+    chapter 8) hangs on the installation vessel's wire about 70 m above the seabed. Its mooring line runs from the
+    anchor's back tip up a vertical chain to the release node (where the wire's release unit holds it), then down in
+    a chain loop and up as fibre rope to a second vessel. Before the release the crew sets the **spacing of the two
+    vessels** and the **mooring-line payout** (together they shape the chain loop, whose width/depth ratio governs
+    the anchor's tilt) and chooses the **release time** (in waves the anchor heaves on the long elastic wire). After
+    the release the anchor falls freely and must hit the seabed fast (to penetrate) and vertical (at most 5 deg
+    tilt). Each step is ``control.interval_s`` of simulated time (default 1 s) of the numba lumped-mass model
+    (:class:`moor_env.Simulator`) with waves, current, the wire and both lines. A step whose release action is
+    positive releases the anchor and simulates the fall to touchdown. Before the release the implicit integrator
+    steps ``control.pre_release_dt_s`` (0.2 s; waves of 7-13 s and slow vessel moves; without waves
+    ``control.pre_release_dt_calm_s``, 0.5 s), the fall at the scene's own step; the accuracy of that trade is
+    measured by ``benchmarks/pre_release_step.py`` (``--calm``). A calm scenario with a slack loop runs on the
+    fidelity preset's own resolution (``fast``: 2 m chain) and, at the release, moves onto its ``tight_line``
+    resolution if the loop, at the spacing and line length of that moment, will be tight at touchdown
+    (``moor_env.remesh``); in waves, or with a loop tight from the start, ``tight_line`` runs throughout
+    (``benchmarks/remesh_at_release.py``), in waves with its ``in_waves`` keys (a 1 m loop chain,
     ``benchmarks/fall_reference.py``).
 
     ## Action Space

@@ -19,11 +19,11 @@ Nothing is kept on disk: continuous draws never repeat a geometry, and a repeat 
 The statics scene is the episode's scene with its **sea state** reset to calm and seed 0, the pre-release
 **rates and release time** set to 0 (none of them enters the static problem: waves are ramped in from zero
 amplitude after the solve), and the chain's **tangential drag coefficient** set to the bundled scene's value.
-Under current Cd_t acts on the small axial component of the current along the loop; measured on gjoa-500 with
-the seed 003 current, Cd_t 0.0069 and 0.0100 put the release node at the same position to 0.1 mm, so the
-equilibrium is solved for the nominal Cd_t (a documented approximation) and episodes that differ only in the sea
-state or Cd_t share one solve and one compile. The solver is deterministic, so a kept and a fresh start give
-identical episodes.
+Under current Cd_t acts on the small axial component of the current along the loop; measured on gjoa-500 with the
+current of seed 003 (Landhaug 2015, *Dynamic Simulation of Dart Anchor Installation*, chapter 8), Cd_t 0.0069 and
+0.0100 put the release node at the same position to 0.1 mm, so the equilibrium is solved for the nominal Cd_t (a
+documented approximation) and episodes that differ only in the sea state or Cd_t share one solve and one compile.
+The solver is deterministic, so a kept and a fresh start give identical episodes.
 """
 
 from __future__ import annotations

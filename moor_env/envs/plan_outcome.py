@@ -8,7 +8,8 @@ Pure functions of what the episode measured (:class:`InstallationRecord`); nothi
 ``success.offset_max_m`` (2 m, the Gjoa radius) of where it hung, and no limit exceeded (:data:`PLAN_LIMITS`): no
 line above its MBL, the release unit within its rating, no fibre on the seabed (the env's own checks,
 :mod:`moor_env.envs.reward`), and no more than ``success.chain_pile_allowance_m`` of chain on the seabed at
-touchdown (seed 003: no chain pile-up while the anchor penetrates).
+touchdown (seed 003, Landhaug 2015, *Dynamic Simulation of Dart Anchor Installation*: no chain pile-up while the
+anchor penetrates).
 
 **Margins** (:func:`margins`): each criterion as a signed distance from its threshold in units of its
 ``success.*_scale`` (positive: met), so that success is every margin positive (the speed, load, fibre and pile

@@ -6,8 +6,8 @@ direction, sea state and its seed, chain drag, anchor mass scale, soil and requi
 config's ``site`` section (:func:`draw_site`; ``reset(options=...)`` fixes fields by name). :func:`site_measures`
 adds what follows from it: the soil's embedment resistance, the required tip penetration and the touchdown speed
 that reaches it (:mod:`moor_env.envs.soil`). :func:`site_observation` is the agent's view (:data:`SITE_OBS_SPEC`):
-everything but the wave seed and the chain's tangential drag, which stay hidden (seed 003 names that drag the
-dominant uncertainty of the fall, Ch. 8).
+everything but the wave seed and the chain's tangential drag, which stay hidden (seed 003, Landhaug 2015,
+*Dynamic Simulation of Dart Anchor Installation*, chapter 8, names that drag the dominant uncertainty of the fall).
 """
 
 from __future__ import annotations
