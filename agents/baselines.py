@@ -35,6 +35,9 @@ Installation"; sections as cited):
   drop height of about 70 m (App. D; DPA 50-70 m, Ch. 2);
 * release at the heave crest: a quarter period after the up-crossing (phase 0.25).
 
+**Crew on AnchorRelease-v1**: the same targets, driven to at the actuators' rates and released at the crest once
+reached (:class:`agents.sequential.LeverFollower`).
+
 **Optimiser** (:class:`OptimiserPolicy`, the plan envs ``AnchorPlan-v0`` and ``-v1``): for each scenario a
 cross-entropy search over the plan's actions, each candidate scored by replaying the very scenario (same seed and
 options, so the score is exact): score = 10 x success + reward. It starts from the crew's plan and also tries it,
@@ -51,6 +54,7 @@ import gymnasium as gym
 import numpy as np
 
 from agents.policy import EpisodeContext, Policy
+from agents.sequential import LeverFollower
 from agents.success import episode_success
 from moor_env.envs.config import EnvConfig, load_env_config
 from moor_env.envs.levers import LEVER_NAMES, lever_action
@@ -62,6 +66,7 @@ from moor_env.errors import ConfigError
 PLAN_ENV = "moor_env/AnchorPlan-v0"
 PLAN_V1_ENV = "moor_env/AnchorPlan-v1"
 RELEASE_ENV = "moor_env/AnchorRelease-v0"
+RELEASE_V1_ENV = "moor_env/AnchorRelease-v1"
 BASELINES = ("random", "crew", "optimiser")
 CREW_SPACING_OVER_DEPTH = 0.1
 CREW_MIN_VERTICAL_CHAIN_M = 30.0
@@ -92,9 +97,14 @@ def is_plan_v1(env_id: str) -> bool:
     return env_id.split("/")[-1] == PLAN_V1_ENV.split("/")[-1]
 
 
+def is_release_v1(env_id: str) -> bool:
+    """Whether ``env_id`` names AnchorRelease-v1 (the levers moved step by step, AnchorPlan-v1's site)."""
+    return env_id.split("/")[-1] == RELEASE_V1_ENV.split("/")[-1]
+
+
 def action_size(env_id: str) -> int:
-    """Number of actions of an env: 5 on ``AnchorPlan-v1``, else 3."""
-    return len(LEVER_NAMES) if is_plan_v1(env_id) else 3
+    """Number of actions of an env: 5 on ``AnchorPlan-v1`` and ``AnchorRelease-v1``, else 3."""
+    return len(LEVER_NAMES) if is_plan_v1(env_id) or is_release_v1(env_id) else 3
 
 
 class RandomPolicy(Policy):
@@ -271,6 +281,8 @@ def make_baseline(name: str, env_id: str = PLAN_ENV, env_config: str | dict | En
     cfg = env_config if isinstance(env_config, EnvConfig) else load_env_config(env_config)
     if name == "random":
         return RandomPolicy(size=action_size(env_id), **kwargs)
+    if name == "crew" and is_release_v1(env_id):
+        return LeverFollower(CrewPlanV1Policy(cfg), cfg, *plan_geometry(cfg), **kwargs)
     if name == "crew":
         return CrewPlanV1Policy(cfg, **kwargs) if is_plan_v1(env_id) else CrewPolicy(env_id, cfg, **kwargs)
     if name == "optimiser":

@@ -169,6 +169,13 @@ class AnchorPlanV1Env(PlanFrames, gym.Env):
         factory = self.core.factory
         targets = lever_targets(action, self.site["water_depth_m"], self.cfg.levers, factory.anchor_length_m,
                                 factory.fairlead_depth_m)
+        reward, info = self.install(targets)
+        return self._obs.copy(), reward, True, False, info
+
+    def install(self, targets: dict[str, float]) -> tuple[float, dict[str, Any]]:
+        """Install on the reset's site with absolute targets (:data:`~moor_env.envs.levers.TARGET_NAMES` and
+        ``drop_height_max_m``, as :func:`~moor_env.envs.levers.lever_targets` gives them): the reward and the
+        info of the step (class docstring)."""
         info: dict[str, Any] = {"site": {**self.site, **self.measures}, "targets": targets, "plan": None,
                                 "touchdown": None, "max_tension_n": {}, "failure": None}
         record = InstallationRecord(None, self.measures["required_speed_m_s"])
@@ -181,7 +188,7 @@ class AnchorPlanV1Env(PlanFrames, gym.Env):
         result = outcome(record, self.cfg)
         info.update(margins=result["margins"], limits_exceeded=result["limits_exceeded"], success=result["success"],
                     reward_terms={"success_surrogate": result["reward"]})
-        return self._obs.copy(), float(result["reward"]), True, False, info
+        return float(result["reward"]), info
 
     def _install(self, targets: dict[str, float], info: dict[str, Any], record: InstallationRecord) -> None:
         """Run the installation of ``targets`` on the core, filling ``info`` and ``record``.

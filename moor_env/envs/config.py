@@ -3,7 +3,8 @@
 An env config names the scene it builds on (``scene: gjoa-500``), the fidelity overrides applied to every
 episode (a mapping of scene overrides, which a fidelity preset can stand in for), the control
 limits, the scenario distribution drawn at every reset, the reward weights, the one-shot plan settings
-(AnchorPlan-v0's ``plan``; AnchorPlan-v1's ``site``, ``levers`` and ``success``, :mod:`moor_env.envs.plan_config`),
+(AnchorPlan-v0's ``plan``; AnchorPlan-v1's ``site``, ``levers`` and ``success``, and AnchorRelease-v1's
+``positioning`` besides them, :mod:`moor_env.envs.plan_config`),
 the equilibria kept in memory and rendering. Every value is SI with the unit in the key name (``_m``, ``_s``, ``_m_s``,
 ``_n``, ``_deg``); ``_over_depth`` values are fractions of the water depth.
 
@@ -33,7 +34,7 @@ from moor_env.envs.distributions import (
     _Strict,
     check_ranges,
 )
-from moor_env.envs.plan_config import LeverConfig, SiteConfig, SuccessConfig
+from moor_env.envs.plan_config import LeverConfig, PositioningConfig, SiteConfig, SuccessConfig
 from moor_env.errors import ConfigError
 
 ENV_CONFIG_DIR = CONFIG_DIR / "envs"
@@ -202,6 +203,7 @@ class EnvConfig(_Strict):
     site: SiteConfig = SiteConfig()
     levers: LeverConfig = LeverConfig()
     success: SuccessConfig = SuccessConfig()
+    positioning: PositioningConfig = PositioningConfig()
     statics: StaticsConfig = StaticsConfig()
     render: RenderConfig = RenderConfig()
 

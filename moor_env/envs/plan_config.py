@@ -1,5 +1,6 @@
 """AnchorPlan-v1's sections of the env config: the site drawn at every reset (``site``), the ranges of the crew's
-levers (``levers``) and the success criterion with the margins of its smooth surrogate (``success``).
+levers (``levers``) and the success criterion with the margins of its smooth surrogate (``success``); and
+AnchorRelease-v1's rates and steps of moving those levers (``positioning``).
 
 The values and their sources are argued in the docstring of :class:`moor_env.envs.AnchorPlanV1Env`; the bundled
 ``configs/envs/anchor-plan.yaml`` states them with a comment each. Validation as in :mod:`moor_env.envs.config`:
@@ -108,3 +109,20 @@ class SuccessConfig(_Strict):
     chain_pile_scale_m: float = Field(5.0, gt=0.0, description="chain-pile margin of one unit [m]")
     softmin_temperature: float = Field(0.25, gt=0.0, le=10.0,
                                        description="temperature of the soft minimum over the margins [margin units]")
+
+
+class PositioningConfig(_Strict):
+    """AnchorRelease-v1's positioning: the length of one step and the crew's actuator rates (each lever moves at
+    most its rate times the step per step), the step limit and the release decision (a release command above
+    ``release_threshold`` on ``release_confirm_steps`` consecutive steps)."""
+
+    step_s: float = Field(60.0, ge=1.0, le=600.0, description="crew time of one positioning step [s]")
+    vessel_speed_max_m_s: float = Field(0.5, gt=0.0, le=5.0, description="second vessel's DP speed [m/s]")
+    winch_rate_max_m_s: float = Field(0.3, gt=0.0, le=5.0, description="mooring-line winch, out or in [m/s]")
+    chain_rate_max_m_s: float = Field(0.2, gt=0.0, le=5.0,
+                                      description="chain paid through the release unit, out or in [m/s]")
+    wire_rate_max_m_s: float = Field(0.5, gt=0.0, le=5.0, description="installation vessel's wire winch [m/s]")
+    max_steps: int = Field(16, ge=2, le=1000, description="steps before the release is forced")
+    release_threshold: float = Field(0.5, ge=0.0, lt=1.0, description="release command that counts as 'release'")
+    release_confirm_steps: int = Field(2, ge=1, le=10, description="consecutive steps the command must hold")
+    max_start_draws: int = Field(50, ge=1, le=10000, description="start geometries drawn before the reset fails")

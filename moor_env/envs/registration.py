@@ -22,6 +22,9 @@ ENVS = {
     "AnchorPlan-v1": {
         "entry_point": "moor_env.envs.anchor_plan_v1:AnchorPlanV1Env",
     },
+    "AnchorRelease-v1": {
+        "entry_point": "moor_env.envs.anchor_release_v1:AnchorReleaseV1Env",
+    },
 }
 
 

@@ -11,10 +11,14 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 # The warnings allowed: check_env makes the env once per declared render mode; "human" cannot draw without a
 # display (CI runs matplotlib's Agg backend), and the env says so once instead of failing silently. Gymnasium
-# calls AnchorPlan-v0 out of date beside AnchorPlan-v1, which it is; it is kept on purpose (README).
-JUSTIFIED = ("render_mode='human' needs a display", "moor_env/AnchorPlan-v0 is out of date")
+# calls AnchorPlan-v0 and AnchorRelease-v0 out of date beside their v1, which they are; they are kept on purpose
+# (README).
+JUSTIFIED = ("render_mode='human' needs a display", "moor_env/AnchorPlan-v0 is out of date",
+             "moor_env/AnchorRelease-v0 is out of date")
 # the env config each env is checked with: the miniature where it fits, AnchorPlan-v1's own (its site is deep water)
-CONFIGS = {"moor_env/AnchorRelease-v0": "tiny", "moor_env/AnchorPlan-v0": "tiny", "moor_env/AnchorPlan-v1": None}
+# for AnchorPlan-v1 and AnchorRelease-v1
+CONFIGS = {"moor_env/AnchorRelease-v0": "tiny", "moor_env/AnchorPlan-v0": "tiny", "moor_env/AnchorPlan-v1": None,
+           "moor_env/AnchorRelease-v1": None}
 
 
 def _unexpected(records) -> list[str]:

@@ -4,9 +4,19 @@ from __future__ import annotations
 
 import re
 
-from moor_env.envs import ACTION_NAMES, OBS_SPEC, REWARD_TERMS, AnchorPlanEnv, AnchorPlanV1Env, AnchorReleaseEnv
+from moor_env.envs import (
+    ACTION_NAMES,
+    OBS_SPEC,
+    REWARD_TERMS,
+    AnchorPlanEnv,
+    AnchorPlanV1Env,
+    AnchorReleaseEnv,
+    AnchorReleaseV1Env,
+)
 from moor_env.envs.anchor_plan import PLAN_ACTION_NAMES
+from moor_env.envs.anchor_release_v1 import OBS_NAMES_V1, STATE_OBS_SPEC
 from moor_env.envs.levers import LEVER_NAMES
+from moor_env.envs.positioning import POSITIONING_ACTIONS
 from moor_env.envs.site import SITE_OBS_SPEC
 
 SECTIONS = ("Description", "Action Space", "Observation Space", "Rewards", "Starting State", "Episode End",
@@ -26,7 +36,7 @@ def _table(text: str) -> list[list[str]]:
 
 
 def test_sections_in_order():
-    for env in (AnchorReleaseEnv, AnchorPlanEnv, AnchorPlanV1Env):
+    for env in (AnchorReleaseEnv, AnchorPlanEnv, AnchorPlanV1Env, AnchorReleaseV1Env):
         positions = [env.__doc__.find(f"## {name}") for name in SECTIONS]
         assert all(p >= 0 for p in positions) and positions == sorted(positions), env.__name__
 
@@ -64,3 +74,18 @@ def test_plan_v1_tables_match_code():
     assert [r[1] for r in actions] == list(LEVER_NAMES)
     assert f"({len(LEVER_NAMES)},)" in _section(doc, "Action Space")
     _check_observations(doc, SITE_OBS_SPEC)
+
+
+def test_release_v1_tables_match_code():
+    """Actions in order; the observation table lists the entries after the site's (9 ..) with units, offsets
+    and scales."""
+    doc = AnchorReleaseV1Env.__doc__
+    actions = _table(_section(doc, "Action Space"))
+    assert [r[1] for r in actions] == list(POSITIONING_ACTIONS)
+    assert f"({len(POSITIONING_ACTIONS)},)" in _section(doc, "Action Space")
+    obs = _table(_section(doc, "Observation Space"))
+    first = len(OBS_NAMES_V1) - len(STATE_OBS_SPEC)
+    assert [int(r[0]) for r in obs] == list(range(first, len(OBS_NAMES_V1)))
+    for row, (name, unit, offset, scale) in zip(obs, STATE_OBS_SPEC, strict=True):
+        assert (row[1], row[2], float(row[3]), float(row[4])) == (name, unit, offset, scale)
+    assert f"({len(OBS_NAMES_V1)},)" in _section(doc, "Observation Space")
