@@ -172,6 +172,19 @@ def test_drop_shows_progress_unless_asked_not_to(capsys, monkeypatch):
     assert [c["progress"] for c in calls] == [True, False]
 
 
+def test_statics_and_fall_past_the_threshold_show_a_progress_bar(capsys, monkeypatch):
+    """A statics solve shows its bar once it has run ``PROGRESS_AFTER_S`` (1 s; here made negative so that any solve
+    counts as long), the fall its simulated time; both on stderr, gone from stdout."""
+    from moor_env.physics import statics
+
+    monkeypatch.setattr(statics, "PROGRESS_AFTER_S", -1.0)
+    code = cli.main(["drop", "vertical-chain", "--set", "drop_height_m=2", "--set", "vertical_chain_length_m=4"])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    assert "statics" in captured.err and "s simulated" in captured.err
+    assert "statics" not in captured.out and "simulated" not in captured.out
+
+
 def test_a_real_drop_prints_rounded_results(capsys):
     code = cli.main(["drop", "vertical-chain", "--set", "drop_height_m=2", "--set", "vertical_chain_length_m=4",
                      "--no-progress"])
