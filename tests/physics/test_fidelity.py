@@ -39,7 +39,7 @@ REFERENCE = {"gjoa-500": _uniform(0.5), "wide": _uniform(0.25), "snap": _uniform
 
 # (preset, scene): (relative touchdown-speed tolerance, tilt tolerance [deg]); the comment gives the error against
 # this file's reference measured in the study's quick run (docs/speed_vs_error.md), and against the study's own
-# reference where it differs. fast's criteria (issue 4): 3 % in speed, 0.5 deg in tilt where it is large (wide).
+# reference where it differs. fast's criteria: 3 % in speed, 0.5 deg in tilt where it is large (wide).
 TOLERANCE = {
     # gjoa-500 with the line-anchor contact: its vertical chain lands on the anchor, is pulled taut by the loop and
     # snaps before touchdown; the speed follows the snaps' timing (docs/model.md): fast +1.65 %, default -2.2 %

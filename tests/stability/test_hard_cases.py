@@ -1,4 +1,4 @@
-"""Hard cases (issue 4): numerically stressful scenes must stay finite with bounded energy and either agree
+"""Hard cases: numerically stressful scenes must stay finite with bounded energy and either agree
 with a finer-resolution reference within the stated tolerance or end with a clear typed error."""
 
 from __future__ import annotations
