@@ -54,7 +54,8 @@ def plot_distributions(results: list[dict[str, Any]], path: str | Path, required
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # noqa: PLC0415 - matplotlib, after its backend is chosen
 
-    per_site = any(e.get("margins") is not None for r in results for e in r["episodes"])
+    per_site = any(e.get("margins") is not None or e.get("required_speed_m_s") is not None
+                   for r in results for e in r["episodes"])
     speed_key = "speed_over_required_m_s" if per_site else "touchdown_speed_m_s"
     fig, axes = plt.subplots(1, 2, figsize=(max(11.0, 2.0 * len(results)), 4.6))
     labels = [textwrap.fill(r["policy"], 16) for r in results]
@@ -83,7 +84,8 @@ def plot_distributions(results: list[dict[str, Any]], path: str | Path, required
 
 def _value(episode: dict[str, Any], key: str) -> float:
     if key == "speed_over_required_m_s":
-        return episode["touchdown_speed_m_s"] - episode.get("required_speed_m_s", math.nan)
+        speed, required = episode.get("touchdown_speed_m_s"), episode.get("required_speed_m_s")
+        return math.nan if speed is None or required is None else speed - required
     return episode[key]
 
 

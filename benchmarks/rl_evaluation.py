@@ -110,6 +110,7 @@ def add_run(run: Path, jobs: int, progress: bool = True) -> dict:
     meta = {**meta, "summaries": summaries, "added_runs": runs}
     stats = evaluation_statistics(results)
     write_records(results, RESULTS, stats, meta)
+    plot_distributions(results, DOCS / "agents-distributions.png")
     return {"results": results, "statistics": stats}
 
 
@@ -206,7 +207,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--jobs", type=int, default=2, help="worker processes")
     parser.add_argument("--add", help="evaluate one more trained run on the same sites and add it to the results")
     parser.add_argument("--curves", nargs="*", default=None, metavar="LABEL=RUN",
-                        help="learning curves to plot (default: SAC=the --run)")
+                        help="learning curves to plot (default: SAC=the --run; none with --add)")
     parser.add_argument("--no-progress", action="store_true")
     parser.add_argument("--docs-only", action="store_true",
                         help=f"rewrite the docs text from {RESULTS.relative_to(ROOT)}, run nothing")
@@ -225,7 +226,8 @@ def main(argv: list[str] | None = None) -> int:
             add_run(run, args.jobs, not args.no_progress)
         else:
             evaluate(run, args.sites, args.jobs, not args.no_progress)
-        plot_curves({label: Path(path) for label, path in curves.items()}, args.jobs)
+        if args.curves is not None or not args.add:  # the curves' crew and optimiser levels cost minutes
+            plot_curves({label: Path(path) for label, path in curves.items()}, args.jobs)
     write_blocks(docs_from_results())
     return 0
 
