@@ -3,8 +3,9 @@ run it and save three rendered frames (:func:`render_episode`).
 
 The record holds ``touchdown_speed_m_s``, ``tilt_deg``, ``reward``, ``reward_terms``, ``success``
 (:func:`agents.success.success_of`, or AnchorPlan-v1's own verdict), ``limits_exceeded``, ``sim_status``,
-``chain_past_back_end_m``, ``steps``, ``release_s`` and ``wall_s``; a reset that fails (no equilibrium) gives a
-record without touchdown.
+``chain_past_back_end_m``, ``steps``, ``release_s`` and ``wall_s`` (on AnchorRelease-v1 also ``forced_release``
+and ``moves_refused``: the positioning steps whose move had no equilibrium); a reset that fails (no equilibrium)
+gives a record without touchdown.
 """
 
 from __future__ import annotations
@@ -37,11 +38,12 @@ def run_episode(env: gym.Env, policy: Policy, scenario: dict[str, Any], env_id: 
         return {**record, **_no_touchdown(f"reset failed: {exc}"), "wall_s": time.perf_counter() - t0}
     policy.begin_episode(EpisodeContext(env_id, cfg, scenario["options"], scenario["seed"], obs, info))
     terms: dict[str, float] = {}
-    total, steps, done = 0.0, 0, False
+    total, steps, refused, done = 0.0, 0, 0, False
     while not done:
         obs, reward, terminated, truncated, info = env.step(policy.act(obs, info))
         total += float(reward)
         steps += 1
+        refused += bool(info.get("move_refused"))
         for k, v in info["reward_terms"].items():
             terms[k] = terms.get(k, 0.0) + float(v)
         done = terminated or truncated
@@ -65,6 +67,8 @@ def run_episode(env: gym.Env, policy: Policy, scenario: dict[str, Any], env_id: 
                       required_speed_m_s=float(info["site"]["required_speed_m_s"]), failure=info["failure"],
                       margins=dict(info["margins"]), targets=dict(info["targets"]),
                       max_tension_n=dict(info["max_tension_n"]))
+    if "forced_release" in info:  # AnchorRelease-v1 positions step by step before it releases
+        record.update(forced_release=bool(info["forced_release"]), moves_refused=refused)
     record["wall_s"] = time.perf_counter() - t0
     return record
 
