@@ -66,7 +66,8 @@ def test_cli_static_json():
 
 def test_kept_wire_recoils_after_release():
     """With keep_wire_after_release the cut wire springs back: its end rises by about its static stretch
-    (1.5 m at 500 m, seed 003 Table 14-7) while the anchor falls."""
+    (1.5 m at 500 m, seed 003: Landhaug 2015, *Dynamic Simulation of Dart Anchor Installation*, Table 14-7) while the
+    anchor falls."""
     from moor_env.simulation import run_drop
 
     scene = load_scene("gjoa-500", {"installation.components.keep_wire_after_release": True})

@@ -15,7 +15,8 @@ SE = "symplectic_euler"
 
 SCENES: dict[str, dict[str, Any]] = {
     "gjoa-500": {"scene": "gjoa-500", "overrides": {}, "moordyn": True,
-                 "about": "seed 003 ch. 8: 500 m, spacing 50 m, 50 m vertical chain, calm"},
+                 "about": ('seed 003 (Landhaug 2015, "Dynamic Simulation of Dart Anchor Installation") ch. 8: '
+                           "500 m, spacing 50 m, 50 m vertical chain, calm")},
     "deep-1500": {"scene": "deep-1500", "overrides": {}, "moordyn": True,
                   "about": "1500 m, spacing 150 m, 1540 m mooring line, calm"},
     "wide": {"scene": "gjoa-500", "overrides": {"vessel_spacing_m": 170.0, "vertical_chain_length_m": 10.0},

@@ -5,7 +5,7 @@ Body state (12 floats): COG position r_G, velocity v_G, unit axis e (from back t
 tip-down anchor has e = (0, 0, -1)) and angular velocity omega (kept perpendicular to e). A point at axial
 coordinate s (from the COG, + towards the tip) is at r_G + s e and moves at v_G + omega x (s e).
 
-Loads (seed 003 sections 2.5 and 5.2):
+Loads (seed 003: Landhaug 2015, *Dynamic Simulation of Dart Anchor Installation*, sections 2.5 and 5.2):
 - gravity on structure + flooded water at the COG; buoyancy of the outer volume at the centre of buoyancy;
 - normal drag 1/2 rho Cd_n D |v_rn| v_rn and skin friction 1/2 rho Cd_t pi D |v_rt| v_rt per metre, by
   section (fins aft have a much larger Cd_n), integrated with midpoint quadrature;

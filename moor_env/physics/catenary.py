@@ -3,7 +3,9 @@
 Used for first guesses of the static solver and as the analytic reference of the statics tests. With
 horizontal force H (constant along the line) and vertical force V(s) = V_A + W(s) at unstretched arc length
 s from end A (W is the submerged weight of the line below s), a uniform section of weight w per metre and
-stiffness EA spans (Faltinsen 1990; seed 000 eqs. 2.14-2.18; seed 004 section 2.3)::
+stiffness EA spans (Faltinsen 1990; seed 000: Wingerei 2008, *Dynamics and damping in mooring lines*,
+eqs. 2.14-2.18; seed 004: Melozzi 2021, *Hydrodynamics of floating systems, Project 2, Task 1: Analysis of a
+mooring cable*, section 2.3)::
 
     dx = H/w [asinh(V1/H) - asinh(V0/H)] + H ds / EA
     dz = H/w [sqrt(1 + (V1/H)^2) - sqrt(1 + (V0/H)^2)] + (V1^2 - V0^2) / (2 w EA)

@@ -2,7 +2,8 @@
 
 The profile array holds (depth below surface [m], speed [m/s]) rows, depths increasing, and ends with the
 seabed point (water depth, 0) appended by the compiler, so the speed falls linearly to zero at the seabed
-below the deepest user point (the seed 003 profile, section 6.4).
+below the deepest user point (the profile of seed 003: Landhaug 2015, *Dynamic Simulation of Dart Anchor Installation*,
+section 6.4).
 """
 
 from __future__ import annotations

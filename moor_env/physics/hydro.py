@@ -1,7 +1,7 @@
 """Morison loads shared by line segments and the anchor: drag on the relative velocity and added mass.
 
 Drag per unit length on a slender element with unit tangent q and relative velocity v_r = u_fluid - v
-(seed 003 eq. 5-11; MoorDyn ``Line::getStateDeriv``)::
+(seed 003: Landhaug 2015, *Dynamic Simulation of Dart Anchor Installation*, eq. 5-11; MoorDyn ``Line::getStateDeriv``)::
 
     f = 1/2 rho Cd_n D |v_rn| v_rn  +  1/2 rho Cd_t (pi D) |v_rt| v_rt
 

@@ -1,4 +1,5 @@
-"""Static equilibrium of the discrete model: the hanging system before release (seed 003, section 8.2, Model 1).
+"""Static equilibrium of the discrete model: the hanging system before release (seed 003: Landhaug 2015,
+*Dynamic Simulation of Dart Anchor Installation*, section 8.2, Model 1).
 
 The equilibrium is an exact rest state of the dynamic model (its own load kernel with every velocity zero, so
 that current drag acts as a static load): a release from it starts without a transient. It is found by the Newton

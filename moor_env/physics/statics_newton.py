@@ -1,4 +1,5 @@
-"""Newton kernel of the static solver (seed 003, section 8.2, Model 1): one numba call runs many iterations.
+"""Newton kernel of the static solver (seed 003: Landhaug 2015, *Dynamic Simulation of Dart Anchor Installation*,
+section 8.2, Model 1): one numba call runs many iterations.
 
 Each iteration solves the linear system of ``physics/statics_system.py``, (D / tau^2 + K) dx = F + G, and moves
 the state along the step: the anchor by its five unknowns, every free node along the tree of lines from the anchor,

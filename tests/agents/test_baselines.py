@@ -92,7 +92,8 @@ def plan_cfg():
 
 
 def test_crew_rule_on_the_five_levers(plan_cfg):
-    """Seed 003's rule as absolute targets: 0.1 h, 1.08 h, L_VERT 50 m, the Gjoa drop line + 2 m/s, the crest."""
+    """Seed 003's rule (Landhaug 2015, *Dynamic Simulation of Dart Anchor Installation*) as absolute targets: 0.1 h,
+    1.08 h, L_VERT 50 m, the Gjoa drop line + 2 m/s, the crest."""
     from moor_env.envs.levers import lever_targets  # noqa: PLC0415
 
     assert crew_drop_height_m(24.5, 0.0) == 50.0 and crew_drop_height_m(27.0, 0.0) == 75.0

@@ -1,4 +1,5 @@
-"""Anchor alone: the free fall against the closed-form 1-DOF solution and the seed's RIFLEX result."""
+"""Anchor alone: the free fall against the closed-form 1-DOF solution and the RIFLEX result of seed 003
+(Landhaug 2015, *Dynamic Simulation of Dart Anchor Installation*, Table 8-4)."""
 
 from __future__ import annotations
 

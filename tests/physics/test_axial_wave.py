@@ -1,4 +1,5 @@
-"""Axial standing wave in the 50 m vertical chain right after release (seed 003 section 8.2.2)."""
+"""Axial standing wave in the 50 m vertical chain right after release (seed 003: Landhaug 2015,
+*Dynamic Simulation of Dart Anchor Installation*, section 8.2.2)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,7 @@
-"""The lumped-mass line's own equilibrium (``physics/discrete_catenary.py``), the static solver's first guess."""
+"""The lumped-mass line's own equilibrium (``physics/discrete_catenary.py``), the static solver's first guess.
+
+Seed 004 is Melozzi 2021, *Hydrodynamics of floating systems, Project 2, Task 1: Analysis of a mooring cable*.
+"""
 
 from __future__ import annotations
 

@@ -1,8 +1,9 @@
 """Contact between line nodes and the anchor's surface, the law alone (moor_env.physics.contact).
 
 The drop tests integrate one node (a 1 m piece of the 142 mm chain, 442 kg) with symplectic Euler at 0.2 ms, about
-0.6 of the explicit step of that chain (0.34 ms), onto the DPA of seed 003 (13 m long, 1.2 m diameter) with the
-stiffness :func:`contact_parameters` chooses for it (15 m/s, 1 cm).
+0.6 of the explicit step of that chain (0.34 ms), onto the DPA of seed 003 (Landhaug 2015, *Dynamic Simulation of
+Dart Anchor Installation*; 13 m long, 1.2 m diameter) with the stiffness :func:`contact_parameters` chooses for
+it (15 m/s, 1 cm).
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""The seed 003 two-vessel drop at 500 m (gjoa-500) against the thesis's RIFLEX results (chapters 8, 10)."""
+"""The two-vessel drop at 500 m of seed 003 (Landhaug 2015, *Dynamic Simulation of Dart Anchor Installation*; gjoa-500)
+against the thesis's RIFLEX results (chapters 8, 10)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,9 @@
-"""Static equilibrium before release against the seeds' published numbers and the analytic catenary."""
+"""Static equilibrium before release against the seeds' published numbers and the analytic catenary.
+
+The seeds: 003 is Landhaug 2015, *Dynamic Simulation of Dart Anchor Installation*; 000 is Wingerei 2008,
+*Dynamics and damping in mooring lines*; 004 is Melozzi 2021,
+*Hydrodynamics of floating systems, Project 2, Task 1: Analysis of a mooring cable*.
+"""
 
 from __future__ import annotations
 
