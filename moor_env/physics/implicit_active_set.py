@@ -17,7 +17,7 @@ import numpy as np
 
 from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.layout import MF_EA, SF_L0, SI_A, SI_ACTIVE, SI_B, SI_MAT
-from moor_env.physics.line import segment_axis, segment_damping_n_s, segment_damping_n_s_m
+from moor_env.physics.line import axial_derivatives, axial_tension_n, segment_axis
 from moor_env.physics.tree import OR_EFF, OR_FLAGS
 
 SET_TOLERANCE = 1e-6  # strain by which a segment must miss its predicted set before the step is solved again
@@ -65,9 +65,7 @@ def segment_gain(s, h, orow, node_pos, seg_i, seg_f, mat_f, seg_tension, seg_cho
     b = seg_i[s, SI_B]
     m = seg_i[s, SI_MAT]
     l0 = seg_f[s, SF_L0]
-    ea = mat_f[m, MF_EA]
-    kq = ea / l0
-    cq = segment_damping_n_s_m(mat_f, m)  # BA / l0
+    kq, cq = axial_derivatives(mat_f, m, l0)
     if seg_chord[s, 3] != 0.0:
         length, qx, qy, qz, kt = chord_point(s, seg_chord, kq, l0)
     else:
@@ -190,7 +188,7 @@ def _pass_active_set(h, model, state, orow, flip_exits):
         else:
             strain1 = (length - l0) / l0 + h * rate1
         ea_ = mat_f[m, MF_EA]
-        t1 = ea_ * strain1 + segment_damping_n_s(mat_f, m, l0) * rate1
+        t1 = axial_tension_n(mat_f, m, l0, strain1, rate1)
         if active and not flip_exits:
             d1x = node_pos[b, 0] - node_pos[a, 0] + h * (node_vel[b, 0] - node_vel[a, 0] + ddx)
             d1y = node_pos[b, 1] - node_pos[a, 1] + h * (node_vel[b, 1] - node_vel[a, 1] + ddy)

@@ -16,14 +16,13 @@ from moor_env.physics.hydro import add_slender_added_mass, add_slender_drag_dv
 from moor_env.physics.implicit_active_set import chord_point, is_active
 from moor_env.physics.layout import (
     EF_RHO,
-    MF_EA,
     SF_L0,
     SI_A,
     SI_ACTIVE,
     SI_B,
     SI_MAT,
 )
-from moor_env.physics.line import half_segment_morison, segment_axis, segment_damping_n_s_m
+from moor_env.physics.line import axial_derivatives, axial_tension_n, half_segment_morison, segment_axis
 from moor_env.physics.point_loads import add_point_loads_dv
 from moor_env.physics.seabed import add_seabed_dv
 from moor_env.physics.tree import OR_EFF, add_sym
@@ -115,15 +114,13 @@ def assemble(h, first, body_node, model, state, orow):
             fy = -h * tension * qy
             fz = -h * tension * qz
         elif seg_chord[s, 3] != 0.0:
-            fx, fy, fz = _add_chord_spring(s, h, tension, qx, qy, qz, rx, ry, rz, node_pos, a, b, ea, eb, l0,
-                                           mat_f[m, MF_EA], segment_damping_n_s_m(mat_f, m), seg_chord, node_mm)
+            fx, fy, fz = _add_chord_spring(s, h, tension, qx, qy, qz, rx, ry, rz, node_pos, a, b, ea, eb, l0, mat_f,
+                                           m, seg_chord, node_mm)
         else:
-            ea_ = mat_f[m, MF_EA]
-            cq = segment_damping_n_s_m(mat_f, m)
-            kq = ea_ / l0
+            kq, cq = axial_derivatives(mat_f, m, l0)
             kt = tension / length
             # unclipped tension of the linear law minus the (clipped) tension already in the loads
-            t_lin = ea_ * (length - l0) / l0 + cq * rq
+            t_lin = axial_tension_n(mat_f, m, l0, (length - l0) / l0, rq / l0)
             alpha = h * cq + h * h * (kq - kt)
             beta = h * h * kt
             w = h * (t_lin - tension) + h * h * (kq - kt) * rq
@@ -143,7 +140,7 @@ def assemble(h, first, body_node, model, state, orow):
 
 
 @jit_step
-def _add_chord_spring(s, h, tension, q0x, q0y, q0z, rx, ry, rz, node_pos, a, b, ea, eb, l0, ea_, cq, seg_chord,
+def _add_chord_spring(s, h, tension, q0x, q0y, q0z, rx, ry, rz, node_pos, a, b, ea, eb, l0, mat_f, m, seg_chord,
                       node_mm):
     """The axial spring-damper of active segment s linearised at its predicted end chord p (``seg_chord``): adds
     its block h C + h^2 K at p to both ends' blocks and returns its right-hand side on node a (minus on b).
@@ -154,9 +151,9 @@ def _add_chord_spring(s, h, tension, q0x, q0y, q0z, rx, ry, rz, node_pos, a, b, 
     start tangent q0, so the right-hand side is h (f(p) + BA/l0 (r . q) q - T q0) - h K(p) (p - d0 - h r), r the
     relative velocity at the start.
     """
-    kq = ea_ / l0
+    kq, cq = axial_derivatives(mat_f, m, l0)
     length, qx, qy, qz, kt = chord_point(s, seg_chord, kq, l0)
-    t_lin = kq * (length - l0) + cq * (rx * qx + ry * qy + rz * qz)
+    t_lin = axial_tension_n(mat_f, m, l0, (length - l0) / l0, (rx * qx + ry * qy + rz * qz) / l0)
     ex = seg_chord[s, 0] - (node_pos[b, 0] - node_pos[a, 0]) - h * rx
     ey = seg_chord[s, 1] - (node_pos[b, 1] - node_pos[a, 1]) - h * ry
     ez = seg_chord[s, 2] - (node_pos[b, 2] - node_pos[a, 2]) - h * rz

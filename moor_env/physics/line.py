@@ -87,6 +87,35 @@ def segment_damping_n_s_m(mat_f, m):
 
 
 @jit
+def axial_tension_n(mat_f, m, l0, strain, strain_rate_1_s):
+    """The axial law of a segment (material m, unstretched length ``l0`` [m]): the linear spring-damper
+    EA strain + BA strain rate [N], unclipped. A line carries no compression: the loads take it where the segment is
+    stretched and clip it at 0; the implicit step linearises it on its active set with the derivatives of
+    :func:`axial_derivatives`."""
+    return mat_f[m, MF_EA] * strain + segment_damping_n_s(mat_f, m, l0) * strain_rate_1_s
+
+
+@jit
+def axial_derivatives(mat_f, m, l0):
+    """Derivatives of :func:`axial_tension_n` with respect to the segment's length, EA / l0 [N/m], and to the rate
+    of its length, BA / l0 [N s/m]."""
+    return mat_f[m, MF_EA] / l0, segment_damping_n_s_m(mat_f, m)
+
+
+@jit
+def smoothed_tension_n(ea, strain, smoothing):
+    """The static solver's tension-only law with its kink rounded over the strain scale ``smoothing``:
+    EA (strain + sqrt(strain^2 + smoothing^2)) / 2 [N] (no damping: the statics have no velocities)."""
+    return 0.5 * ea * (strain + math.sqrt(strain * strain + smoothing * smoothing))
+
+
+@jit
+def smoothed_tension_slope_n(ea, strain, smoothing):
+    """Derivative of :func:`smoothed_tension_n` with respect to the strain [N]."""
+    return 0.5 * ea * (1.0 + strain / math.sqrt(strain * strain + smoothing * smoothing))
+
+
+@jit
 def half_segment_morison(mat_f, m, l0, rho):
     """Morison coefficients of the half of a segment (material m, unstretched length ``l0`` [m]) that each end
     node carries, in water of density ``rho`` [kg/m^3]: normal and tangential drag factors ``0.5 rho C_D A``
@@ -138,13 +167,11 @@ def segment_loads(node_pos, node_vel, seg_i, seg_f, mat_f, line_f, env_f, curren
             worst = s
         tension = 0.0
         if smoothing > 0.0:
-            tension = 0.5 * mat_f[m, MF_EA] * (strain + math.sqrt(strain * strain + smoothing * smoothing))
+            tension = smoothed_tension_n(mat_f[m, MF_EA], strain, smoothing)
         elif strain > 0.0:
-            ea = mat_f[m, MF_EA]
-            ba = segment_damping_n_s(mat_f, m, l0)
             rate = ((node_vel[b, 0] - node_vel[a, 0]) * qx + (node_vel[b, 1] - node_vel[a, 1]) * qy
                     + (node_vel[b, 2] - node_vel[a, 2]) * qz) / l0
-            tension = ea * strain + ba * rate
+            tension = axial_tension_n(mat_f, m, l0, strain, rate)
             if tension < 0.0:
                 tension = 0.0
         seg_tension[s] = tension

@@ -37,7 +37,7 @@ from moor_env.physics._jit import jit_step
 from moor_env.physics.environment import current_velocity
 from moor_env.physics.hydro import slender_drag_dq
 from moor_env.physics.linalg3 import inverse3
-from moor_env.physics.line import half_segment_morison, segment_axis
+from moor_env.physics.line import half_segment_morison, segment_axis, smoothed_tension_slope_n
 from moor_env.physics.loads import compute_loads, set_constrained_nodes
 from moor_env.physics.seabed import seabed_stiffness_n_m
 from moor_env.physics.tree import OR_EFF, OR_ORDER, TR_DEG, TR_NB, TR_SEG
@@ -180,7 +180,7 @@ def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling
         if strain <= 0.0 and taut[s] == 1:
             kq = ea_n / l0  # slack for a step or two only: K keeps it taut
         else:  # the smoothed tension-only law's slope
-            kq = max(0.5 * ea_n * (1.0 + strain / math.sqrt(strain * strain + smoothing * smoothing)) / l0, floor)
+            kq = max(smoothed_tension_slope_n(ea_n, strain, smoothing) / l0, floor)
             if taut[s] == 0:
                 kt = max(kt, floor)
         for i in range(3):
