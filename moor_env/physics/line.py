@@ -1,7 +1,7 @@
 """Lumped-mass lines: axial elasticity (tension only), internal damping, Morison loads, weight, payout.
 
-Each segment is an axial spring-damper between two nodes (MoorDyn ``Line::getStateDeriv``; seed 003
-section 2.3 uses beams, a chain has EI ~ 0). Tension is EA * strain + BA * strain rate with
+Each segment is an axial spring-damper between two nodes (MoorDyn ``Line::getStateDeriv``; seed 003, Landhaug
+2015, *Dynamic Simulation of Dart Anchor Installation*, section 2.3, uses beams, a chain has EI ~ 0). Tension is EA * strain + BA * strain rate with
 BA = zeta * l0 * sqrt(EA * w) (zeta is the damping ratio of one segment's axial mode), and is never
 negative: a slack segment (stretched length <= l0) carries nothing, and a straightening slack segment is not
 damped. (The static solver's first phase replaces the kink at zero strain by the smooth
