@@ -116,9 +116,10 @@ def episode_records(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def write_records(results: list[dict[str, Any]], path: str | Path, statistics: dict[str, Any] | None = None,
-                  meta: dict[str, Any] | None = None) -> Path:
-    """Write the per-episode records of every policy (:func:`episode_records`) and the statistics as JSON."""
-    data = {"meta": meta or {}, "statistics": statistics or {}, "episodes": episode_records(results)}
+                  meta: dict[str, Any] | None = None, extra: dict[str, Any] | None = None) -> Path:
+    """Write the per-episode records of every policy (:func:`episode_records`) and the statistics as JSON, with the
+    top-level entries of ``extra`` beside them."""
+    data = {"meta": meta or {}, "statistics": statistics or {}, "episodes": episode_records(results), **(extra or {})}
     return write_json_atomic(path, data)
 
 

@@ -36,6 +36,8 @@ from moor_env.errors import ConfigError
 
 HELD_OUT_SEED = 20250605
 HELD_OUT_SITE_SEED = 17_2026_0917
+# a second held-out set, drawn the same way: it confirms a result after design choices were made looking at the first
+CONFIRMATION_SITE_SEED = HELD_OUT_SITE_SEED + 1
 DEFAULT_COUNT = 24
 DEFAULT_SITE_COUNT = 500
 PLAN_V1_CONFIG = "anchor-plan"

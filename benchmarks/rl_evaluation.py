@@ -4,6 +4,7 @@ Run from the repository root after training the full preset (``python -m agents.
 configs/agents/full.yaml``, five seeds under ``runs/full``)::
 
     python benchmarks/rl_evaluation.py [--run runs/full] [--sites 500] [--jobs 2]
+    python benchmarks/rl_evaluation.py --confirm 500   # the run and the crew on a second held-out set
 
 Every policy plays the same held-out sites (:func:`agents.scenarios.held_out_sites`: drawn from the env's site
 distribution with seeds that training never uses). The trained run counts each of its seeds as one run (IQM over
@@ -33,9 +34,10 @@ from _machine import run_record  # noqa: E402
 
 from agents.curves import baseline_levels, learning_curves, plot_learning_curves  # noqa: E402
 from agents.evaluate import PLAN_V1_CONFIG, evaluate_targets  # noqa: E402
-from agents.report import markdown_table, plot_distributions, write_records  # noqa: E402
+from agents.io import write_json_atomic  # noqa: E402
+from agents.report import episode_records, markdown_table, plot_distributions, write_records  # noqa: E402
 from agents.runs import run_dirs  # noqa: E402
-from agents.scenarios import held_out_sites  # noqa: E402
+from agents.scenarios import CONFIRMATION_SITE_SEED, held_out_sites  # noqa: E402
 from agents.statistics import evaluation_statistics, format_statistics  # noqa: E402
 from moor_env.errors import ConfigError  # noqa: E402
 
@@ -109,9 +111,42 @@ def add_run(run: Path, jobs: int, progress: bool = True) -> dict:
                  **run_record(load_before), "wall_s": time.perf_counter() - t0})
     meta = {**meta, "summaries": summaries, "added_runs": runs}
     stats = evaluation_statistics(results)
-    write_records(results, RESULTS, stats, meta)
+    kept = {"confirmation": data["confirmation"]} if "confirmation" in data else None
+    write_records(results, RESULTS, stats, meta, kept)
     plot_distributions(results, DOCS / "agents-distributions.png")
     return {"results": results, "statistics": stats}
+
+
+def confirm_run(run: Path, sites: int, jobs: int, progress: bool = True) -> dict:
+    """The trained run and the crew on a second held-out set (:data:`CONFIRMATION_SITE_SEED`), stored in the
+    results JSON under ``confirmation``: a check of the first set's result that no design choice has looked at."""
+    data = load_result(RESULTS_STEM)
+    load_before = os.getloadavg()[0]
+    t0 = time.perf_counter()
+    results = evaluate_targets([str(run), "crew"], held_out_sites(sites, seed=CONFIRMATION_SITE_SEED), None,
+                               PLAN_V1_CONFIG, jobs, progress)
+    data["confirmation"] = {"run": run.name, "sites": sites, "site_seed": CONFIRMATION_SITE_SEED,
+                            "source_commit": _source_commit(), **run_record(load_before),
+                            "wall_s": time.perf_counter() - t0, "statistics": evaluation_statistics(results),
+                            "episodes": episode_records(results)}
+    write_json_atomic(RESULTS, data)
+    return data["confirmation"]
+
+
+def _confirmation_text(data: dict) -> str:
+    """`` On a second held-out set ...`` where the results hold a confirmation, else ``""``."""
+    conf = data.get("confirmation")
+    if not conf:
+        return ""
+    stats, run = conf["statistics"], conf["run"]
+    seeds = stats["seeds"][run]
+    diff = next(c for c in stats["paired"] if c["a"] == run and c["b"] == "crew")
+    return (f"On a second held-out set of {conf['sites']} sites (`--confirm {conf['sites']}`, drawn the same way with "
+            f"another seed, looked at by no design choice; code at {_short(conf.get('source_commit'))}): `{run}` "
+            f"IQM {100 * seeds['iqm']:.1f} % [{100 * seeds['ci'][0]:.1f}, {100 * seeds['ci'][1]:.1f}] %, crew "
+            f"{100 * stats['success']['crew']['rate']:.1f} %, `{run}` minus crew {100 * diff['difference']:+.1f} "
+            f"points (paired 95 % interval [{100 * diff['ci'][0]:+.1f}, {100 * diff['ci'][1]:+.1f}]; only "
+            f"`{run}` {diff['only_a']}, only crew {diff['only_b']} site-runs).")
 
 
 def plot_curves(runs: dict[str, Path], jobs: int) -> Path:
@@ -139,7 +174,7 @@ def headline(data: dict) -> str:
             f"{_pct(success['crew']['rate'])}, random plans on {_pct(success['random']['rate'])}, the per-site "
             f"optimiser on {_pct(success['optimiser']['rate'])}; trained minus crew {100 * diff['difference']:+.1f} "
             f"points (paired 95 % interval [{100 * diff['ci'][0]:+.1f}, {100 * diff['ci'][1]:+.1f}])"
-            f"{_added_headline(data)}. `{COMMAND}`, run {meta['date'][:10]}: "
+            f"{_added_headline(data)}{_confirmation_headline(data)}. `{COMMAND}`, run {meta['date'][:10]}: "
             f"[docs/agents-results.md](docs/agents-results.md).")
 
 
@@ -151,6 +186,16 @@ def _added_headline(data: dict) -> str:
         if seeds is not None:
             parts.append(f"; `{added['name']}` ({seeds['runs']} seeds) {_pct(seeds['iqm'])} (IQM)")
     return "".join(parts)
+
+
+def _confirmation_headline(data: dict) -> str:
+    """``; on a second held-out set ... +x points [a, b]`` where the results hold a confirmation."""
+    conf = data.get("confirmation")
+    if not conf:
+        return ""
+    diff = next(c for c in conf["statistics"]["paired"] if c["a"] == conf["run"] and c["b"] == "crew")
+    return (f"; on a second held-out set of {conf['sites']} sites trained minus crew {100 * diff['difference']:+.1f} "
+            f"points [{100 * diff['ci'][0]:+.1f}, {100 * diff['ci'][1]:+.1f}]")
 
 
 def results_block(data: dict) -> str:
@@ -167,6 +212,8 @@ def results_block(data: dict) -> str:
              f"cross-entropy iterations per site.{_added_line(meta)}", "",
              markdown_table(meta["summaries"]).rstrip("\n"), "",
              "```text", format_statistics(data["statistics"]).rstrip("\n"), "```"]
+    if data.get("confirmation"):
+        lines += ["", _confirmation_text(data)]
     return "\n".join(lines)
 
 
@@ -208,13 +255,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--add", help="evaluate one more trained run on the same sites and add it to the results")
     parser.add_argument("--curves", nargs="*", default=None, metavar="LABEL=RUN",
                         help="learning curves to plot (default: SAC=the --run; none with --add)")
+    parser.add_argument("--confirm", type=int, metavar="SITES",
+                        help="evaluate the --run and the crew on a second held-out set of SITES sites")
     parser.add_argument("--no-progress", action="store_true")
     parser.add_argument("--docs-only", action="store_true",
                         help=f"rewrite the docs text from {RESULTS.relative_to(ROOT)}, run nothing")
     args = parser.parse_args(argv)
     if not args.docs_only:
         run = Path(args.add or args.run)
-        curves = dict(c.split("=", 1) for c in args.curves) if args.curves else {"SAC": args.run}
+        plots_curves = args.curves is not None or not (args.add or args.confirm)  # their levels cost minutes
+        curves = (dict(c.split("=", 1) for c in args.curves) if args.curves else {"SAC": args.run}) if plots_curves \
+            else {}
         try:
             for path in (run, *curves.values()):
                 run_dirs(path)
@@ -222,11 +273,13 @@ def main(argv: list[str] | None = None) -> int:
             print(f"error: {exc} (train it: python -m agents.train --config configs/agents/full.yaml)",
                   file=sys.stderr)
             return 2
-        if args.add:
+        if args.confirm:
+            confirm_run(run, args.confirm, args.jobs, not args.no_progress)
+        elif args.add:
             add_run(run, args.jobs, not args.no_progress)
         else:
             evaluate(run, args.sites, args.jobs, not args.no_progress)
-        if args.curves is not None or not args.add:  # the curves' crew and optimiser levels cost minutes
+        if plots_curves:
             plot_curves({label: Path(path) for label, path in curves.items()}, args.jobs)
     write_blocks(docs_from_results())
     return 0
