@@ -99,6 +99,12 @@ def run_scene(overrides: dict) -> dict:
     except (StaticsNotConverged, SimulationDiverged) as exc:
         record.update(outcome="needs the fallback", cause=str(exc))
     record.update(solve_s=CLOCK() - t0, solve_wall_s=time.perf_counter() - w0)
+    if record["outcome"] == "converged":  # timed again: a rare path's kernel compiles on its first use
+        model = compile_scene(scene)
+        t0, w0 = CLOCK(), time.perf_counter()
+        solve_statics(model, progress=False, method="newton")
+        record.update(first_solve_s=record["solve_s"], solve_s=min(record["solve_s"], CLOCK() - t0),
+                      solve_wall_s=min(record["solve_wall_s"], time.perf_counter() - w0))
     return record
 
 
@@ -224,7 +230,8 @@ def summarize_extras(fallbacks: list[dict], moorpy: list[dict]) -> dict:
 
 
 CLOCK_TEXT = (" Times are CPU time of the solving process (`time.process_time`, one core), MoorPy's the same way; "
-              "the records keep the wall times beside them.")
+              "a converged scene is solved twice and the shorter time counts (a rare path's kernel compiles on its "
+              "first use); the records keep the first time and the wall times beside them.")
 
 
 def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
