@@ -28,6 +28,7 @@ from _machine import run_record, write_results  # noqa: E402
 from moor_env import load_scene, solve_statics  # noqa: E402
 from moor_env.physics import implicit as imp  # noqa: E402
 from moor_env.physics import implicit_contact as ic  # noqa: E402
+from moor_env.physics import implicit_contact_set as ics  # noqa: E402
 from moor_env.physics import layout as L  # noqa: E402
 from moor_env.physics.implicit_active_set import update_active_set  # noqa: E402
 from moor_env.physics.implicit_assembly import assemble  # noqa: E402
@@ -35,12 +36,12 @@ from moor_env.simulation import run_drop  # noqa: E402
 
 CASES = [("vertical-chain", "symplectic_euler"), ("vertical-chain", "implicit_euler"),
          ("gjoa-500", "symplectic_euler"), ("gjoa-500", "implicit_euler")]
-REPEATS = 8
+REPEATS = 40
 COMMAND = "python benchmarks/contact_cost.py"
 DOC = DOCS / "fall-accuracy.md"
 
 
-def _prepared(scene: str, integrator: str, contact: str):
+def prepared(scene: str, integrator: str, contact: str):
     """The scene's simulator at equilibrium and its state (statics once)."""
     static = solve_statics(load_scene(scene, {"integrator": integrator,
                                               "discretization.line_anchor_contact": contact}), progress=False)
@@ -61,7 +62,7 @@ def _fall(sim, saved) -> tuple[float, dict]:
                       "dt_s": result.dt_s}
 
 
-def _solves_per_step(sim, saved) -> dict:
+def solves_per_step(sim, saved) -> dict:
     """Implicit fall only: linear solves per step and how many of them the contact set asked for, replaying each
     step's solve loop (``implicit.implicit_euler_update``) from Python before the kernel takes the step (not
     timed)."""
@@ -76,7 +77,7 @@ def _solves_per_step(sim, saved) -> dict:
         nq = imp.prepare(False, body_node, state, tree, orow)
         contact = model.contact_f[L.CF_ON] != 0.0
         if contact:
-            ic.init_contact_set(sim.dt, model, state)
+            ics.init_contact_set(sim.dt, model, state)
         for it in range(imp.MAX_ACTIVE_SET_SOLVES):
             solves += 1
             assemble(sim.dt, it == 0, body_node, model, state, orow)
@@ -86,7 +87,7 @@ def _solves_per_step(sim, saved) -> dict:
             imp.couple_body(sim.dt, body_node, model, state)
             imp.back_substitute(sim.dt, nq, model, state, tree, orow)
             changed = update_active_set(sim.dt, model, state, orow)
-            changed_contact = ic.update_contact_set(sim.dt, model, state) if contact else 0
+            changed_contact = ics.update_contact_set(sim.dt, model, state) if contact else 0
             contact_solves += changed_contact > 0 and it + 1 < imp.MAX_ACTIVE_SET_SOLVES
             if changed + changed_contact == 0:
                 break
@@ -100,7 +101,7 @@ def _solves_per_step(sim, saved) -> dict:
 def _case(scene: str, integrator: str) -> dict:
     """Contact off and on, ``REPEATS`` falls each, interleaved (the machine's load drifts), after a warm-up each;
     the fastest CPU time per step of each."""
-    runs = {contact: _prepared(scene, integrator, contact) for contact in ("off", "on")}
+    runs = {contact: prepared(scene, integrator, contact) for contact in ("off", "on")}
     out = {}
     for contact, (sim, saved) in runs.items():
         _, out[contact] = _fall(sim, saved)  # compiles
@@ -111,7 +112,7 @@ def _case(scene: str, integrator: str) -> dict:
             out[contact]["us_per_step"] = min(out[contact]["us_per_step"], 1e6 * per_step)
     if integrator == "implicit_euler":
         for contact, (sim, saved) in runs.items():
-            out[contact].update(_solves_per_step(sim, saved))
+            out[contact].update(solves_per_step(sim, saved))
     return {"scene": scene, "integrator": integrator, **out}
 
 

@@ -44,7 +44,8 @@ Weight, buoyancy and everything else are explicit. The anchor is then advanced l
 corrected acceleration; nodes set from the anchor, vessels and welded parents are placed by the caller.
 
 The assembly of the block system is in ``physics/implicit_assembly.py``, the active set in
-``physics/implicit_active_set.py``. Solver: the block tree elimination of ``physics/tree.py`` (O(N), no fill-in),
+``physics/implicit_active_set.py``, the line-anchor contact in ``physics/implicit_contact.py`` and its set in
+``physics/implicit_contact_set.py``. Solver: the block tree elimination of ``physics/tree.py`` (O(N), no fill-in),
 with the body node as the root of its component. Its ordering depends on the topology alone, so it is kept from
 one step to the next and rebuilt only where the caller cannot vouch for the topology (``reuse_order`` false): at
 the first step of every ``advance`` call (release, a dropped line, a restored state happen between calls) and
@@ -73,12 +74,8 @@ from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.anchor import body_acceleration, rotate_axis
 from moor_env.physics.implicit_active_set import init_active_set, segment_gain, update_active_set
 from moor_env.physics.implicit_assembly import assemble
-from moor_env.physics.implicit_contact import (
-    assemble_contact,
-    contact_reaction,
-    init_contact_set,
-    update_contact_set,
-)
+from moor_env.physics.implicit_contact import assemble_contact, contact_reaction
+from moor_env.physics.implicit_contact_set import init_contact_set, update_contact_set
 from moor_env.physics.layout import (
     BF_ACTIVE,
     BF_M11,

@@ -1,5 +1,5 @@
-"""The line-anchor contact in the implicit step (``physics/implicit.py``): its linearisation, its active set and
-its reaction on the anchor.
+"""The line-anchor contact in the implicit step (``physics/implicit.py``): its linearisation and its reaction on
+the anchor; the step's contact set is in ``physics/implicit_contact_set.py``.
 
 Why: the contact is stiff on the implicit step's scale (omega = 552 rad/s for the chain against steps of ~11 ms,
 k h^2 / m ~ 40), and a node that meets the anchor inside a step would fly a whole step into it (16 cm at 15 m/s).
@@ -9,10 +9,6 @@ So, as the segments' axial law, the contact is solved for:
   side, with K = k n n^T, C = c n n^T + the friction's damping at fixed normal force (viscous g (I - n n^T), or
   sliding mu N / |w_t| (I - n n^T - t t^T), t the slip direction), w the velocity relative to the body point:
   one Newton iteration of backward Euler on the contact, with the anchor moving as the explicit step moves it;
-- the set holds the nodes inside at the start of the step; after each solve, a node outside predicted inside at
-  the end of the step enters with the unclipped linear law k d - c (w . n) (d < 0: the gap), so that the solve
-  sees where it lands, and a node inside predicted outside leaves (its start-of-step force removed); each node
-  changes at most once per step (as the segments, ``implicit_active_set``);
 - left out of K and C (the solver's blocks are symmetric): the turning of the normal (f_n H, below d / rho of k
   n n^T), the anchor's rotation, and the friction's dependence on the normal force (symmetrised, it would be an
   indefinite term of size mu k that can make the block singular);
@@ -25,7 +21,7 @@ from __future__ import annotations
 import math
 
 from moor_env.physics._jit import jit_no_refcount, jit_step
-from moor_env.physics.anchor_surface import surface_distance, within_reach
+from moor_env.physics.anchor_surface import surface_distance
 from moor_env.physics.contact import add_contact_reaction, contact_force, relative_velocity
 from moor_env.physics.layout import (
     CF_MU,
@@ -34,9 +30,6 @@ from moor_env.physics.layout import (
     CF_ZETA,
     CO_FORCE,
     CO_PEAK_FORCE,
-    EF_DEPTH,
-    NI_KIND,
-    NODE_FREE,
 )
 from moor_env.physics.tree import add_sym
 
@@ -47,7 +40,8 @@ SET_ENTERED = 2  # outside at the start, predicted inside at its end (linear law
 SET_LEFT = 3  # inside at the start, predicted outside at its end (no force)
 SET_COMING = 4  # outside at the start, inside at its end at its start velocity: in the first solve as SET_ENTERED
 SET_MISSED = 5  # SET_COMING whose solve ends it outside: out, and it may still enter once
-DEPTH_TOLERANCE_M = 1e-6  # a node must miss its predicted set by this much before the step is solved again
+SET_BITS = 3  # an entry of the candidate list (``state.contact_set``) is node << SET_BITS | its SET_* state
+SET_MASK = (1 << SET_BITS) - 1
 
 
 @jit_step
@@ -158,6 +152,16 @@ def contact_force_change(h, mode, depth, nx, ny, nz, wx, wy, wz, mass_kg, contac
 
 
 @jit_step
+def candidate(contact_set, k):
+    """Node and ``SET_*`` state of entry k of the step's candidate list (``state.contact_set``, the list built by
+    ``implicit_contact_set.init_contact_set``); node -1 past its end."""
+    entry = contact_set[k]
+    if entry < 0:
+        return -1, SET_OUT
+    return entry >> SET_BITS, entry & SET_MASK
+
+
+@jit_step
 def _law_mode(mode):
     """The law a contact-set state applies: a coming node's that of an entering one, a missed node's none."""
     if mode == SET_COMING:
@@ -168,41 +172,19 @@ def _law_mode(mode):
 
 
 @jit_no_refcount
-def init_contact_set(h, model, state):
-    """Start of a step: every free node inside the anchor is in the contact set (``SET_IN``), and every node that
-    reaches it within the step at its present velocity joins it (``SET_COMING``), so that a node resting on or
-    landing on the anchor needs no second solve."""
-    contact_set = state.contact_set
-    node_i = state.node_i
-    p = state.node_pos
-    v = state.node_vel
-    for n in range(node_i.shape[0]):
-        contact_set[n] = SET_OUT
-        if node_i[n, NI_KIND] != NODE_FREE or p[n, 2] < -model.env_f[EF_DEPTH]:
-            continue
-        wx, wy, wz = relative_velocity(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2], state.body_state)
-        reach = h * math.sqrt(wx * wx + wy * wy + wz * wz)
-        if not within_reach(p[n, 0], p[n, 1], p[n, 2], state.body_state, model.contact_shape, reach):
-            continue
-        sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(p[n, 0], p[n, 1], p[n, 2], state.body_state,
-                                                               model.contact_shape)
-        if sd < 0.0:
-            contact_set[n] = SET_IN
-        elif predicted_depth(h, -sd, nx, ny, nz, wx, wy, wz, 0.0, 0.0, 0.0) > DEPTH_TOLERANCE_M:
-            contact_set[n] = SET_COMING
-
-
-@jit_no_refcount
 def assemble_contact(h, model, state):
-    """Add every node's contact terms (:func:`contact_terms`) to its block (``node_mm``) and right-hand side
+    """Add every candidate's contact terms (:func:`contact_terms`) to its block (``node_mm``) and right-hand side
     (``node_acc``), after the lines' assembly."""
     contact_set = state.contact_set
     p = state.node_pos
     v = state.node_vel
     node_mm = state.node_mm
     node_acc = state.node_acc
-    for n in range(contact_set.shape[0]):
-        mode = _law_mode(contact_set[n])
+    for k in range(contact_set.shape[0]):
+        n, mode = candidate(contact_set, k)
+        if n < 0:
+            break
+        mode = _law_mode(mode)
         if mode == SET_OUT:
             continue
         depth, nx, ny, nz, wx, wy, wz = contact_state(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2],
@@ -222,43 +204,6 @@ def assemble_contact(h, model, state):
 
 
 @jit_no_refcount
-def update_contact_set(h, model, state):
-    """After a solve (``node_acc`` = dv): nodes outside predicted inside at the end of the step enter the set,
-    nodes inside predicted outside leave it, each once per step. Returns how many changed."""
-    contact_set = state.contact_set
-    node_i = state.node_i
-    p = state.node_pos
-    v = state.node_vel
-    dv = state.node_acc
-    changed = 0
-    for n in range(node_i.shape[0]):
-        mode = contact_set[n]
-        if node_i[n, NI_KIND] != NODE_FREE or mode == SET_ENTERED or mode == SET_LEFT:
-            continue
-        if (mode == SET_OUT or mode == SET_MISSED) and p[n, 2] < -model.env_f[EF_DEPTH]:
-            continue  # below the seabed the anchor is in the soil (``contact.add_contact_loads``)
-        wx, wy, wz = relative_velocity(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2], state.body_state)
-        # reach: how far the node can move against the anchor in the step
-        reach = h * (math.sqrt(wx * wx + wy * wy + wz * wz)
-                     + math.sqrt(dv[n, 0] * dv[n, 0] + dv[n, 1] * dv[n, 1] + dv[n, 2] * dv[n, 2]))
-        if not within_reach(p[n, 0], p[n, 1], p[n, 2], state.body_state, model.contact_shape, reach):
-            continue
-        depth, nx, ny, nz, wx, wy, wz = contact_state(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2],
-                                                      state.body_state, model.contact_shape)
-        end = predicted_depth(h, depth, nx, ny, nz, wx, wy, wz, dv[n, 0], dv[n, 1], dv[n, 2])
-        if (mode == SET_OUT or mode == SET_MISSED) and end > DEPTH_TOLERANCE_M:
-            contact_set[n] = SET_ENTERED
-            changed += 1
-        elif mode == SET_IN and end < -DEPTH_TOLERANCE_M:
-            contact_set[n] = SET_LEFT
-            changed += 1
-        elif mode == SET_COMING and end < -DEPTH_TOLERANCE_M:
-            contact_set[n] = SET_MISSED
-            changed += 1
-    return changed
-
-
-@jit_no_refcount
 def contact_reaction(h, model, state):
     """Add to the anchor's load (``body_load``) the opposite of each node's contact force as the solve applied
     it beyond its start-of-step force (:func:`contact_force_change`), and record the step's net contact force
@@ -270,8 +215,11 @@ def contact_reaction(h, model, state):
     load = state.body_load
     any_contact = False
     tx = ty = tz = 0.0
-    for n in range(contact_set.shape[0]):
-        mode = _law_mode(contact_set[n])
+    for k in range(contact_set.shape[0]):
+        n, mode = candidate(contact_set, k)
+        if n < 0:
+            break
+        mode = _law_mode(mode)
         if mode == SET_OUT:
             continue
         any_contact = True

@@ -115,3 +115,16 @@ def test_no_chain_inside_the_anchor_in_bundled_scenes(scene, overrides):
     assert result.line_anchor_contact
     assert result.contact_peak_depth_m < 0.05
     assert result.chain_past_back_end_m < 0.05
+
+
+@pytest.mark.parametrize("scene", ["vertical-chain", "gjoa-500"])
+def test_broad_phase_leaves_out_only_nodes_that_cannot_reach(scene):
+    """Reference: the implicit fall with every free node a candidate of the contact set (a speed limit of 1e12 m/s
+    puts all of them inside the broad phase's radius, ``implicit_contact_set.init_contact_set``): the fall at the
+    default limit is the same bit for bit, so the broad phase drops no node that the contact set would take."""
+    implicit = {"integrator": "implicit_euler"}
+    default = _drop(scene, **implicit)
+    everyone = _drop(scene, **implicit, **{"simulation.speed_limit_m_s": 1e12})
+    assert default.touchdown_speed_m_s == everyone.touchdown_speed_m_s
+    assert default.contact_peak_force_n == everyone.contact_peak_force_n
+    assert default.chain_on_anchor_m == everyone.chain_on_anchor_m

@@ -1,0 +1,142 @@
+"""The contact set of the implicit step (``physics/implicit.py``): which line nodes carry the line-anchor contact's
+linearised law (``physics/implicit_contact.py``) during the step.
+
+- The set holds the nodes inside at the start of the step and those predicted to land within it; after each
+  solve, a node outside predicted inside at the end of the step enters with the unclipped linear law
+  k d - c (w . n) (d < 0: the gap), so that the solve sees where it lands, and a node inside predicted outside
+  leaves (its start-of-step force removed); each node changes at most once per step (as the segments,
+  ``implicit_active_set``).
+- Broad phase: once per step, one distance per node to the anchor's COG keeps the candidates, the nodes that can
+  reach the anchor within the step; the solves test only them. Storage: ``state.contact_set`` holds the
+  candidates in node order, each as node << ``SET_BITS`` | its ``SET_*`` state, the list ended by -1 where it
+  is shorter than the nodes.
+"""
+
+from __future__ import annotations
+
+import math
+
+from moor_env.physics._jit import jit_no_refcount, jit_step
+from moor_env.physics.anchor_surface import surface_distance, within_reach
+from moor_env.physics.contact import relative_velocity
+from moor_env.physics.implicit_contact import (
+    SET_BITS,
+    SET_COMING,
+    SET_ENTERED,
+    SET_IN,
+    SET_LEFT,
+    SET_MISSED,
+    SET_OUT,
+    candidate,
+    contact_state,
+    predicted_depth,
+)
+from moor_env.physics.layout import (
+    BS_POS,
+    CS_BACK,
+    CS_FRONT,
+    CS_RADIUS,
+    EF_DEPTH,
+    EF_SPEED_LIMIT,
+    NI_KIND,
+    NODE_FREE,
+)
+
+DEPTH_TOLERANCE_M = 1e-6  # a node must miss its predicted set by this much before the step is solved again
+
+
+@jit_step
+def bounding_radius_m(shape):
+    """Radius of the sphere about the anchor's COG that holds its bounding cylinder in any orientation [m]."""
+    r2 = 0.0
+    for i in range(shape.shape[0]):
+        r2 = max(r2, max(shape[i, CS_FRONT] ** 2, shape[i, CS_BACK] ** 2) + shape[i, CS_RADIUS] ** 2)
+    return math.sqrt(r2)
+
+
+@jit_no_refcount
+def init_contact_set(h, model, state):
+    """Start of a step: the step's candidates, in node order, into ``state.contact_set`` (each as
+    node << ``SET_BITS`` | its state, the list ended by -1 where shorter than the nodes): the free nodes above the
+    seabed (below it the anchor is in the soil, ``contact.add_contact_loads``) that can reach the anchor in the
+    step (the broad phase: one distance per node and step; the solves test the candidates only). Every candidate
+    inside the anchor is in the contact set (``SET_IN``), and every one that reaches it within the step at its
+    present velocity joins it (``SET_COMING``), so that a node landing on the anchor needs no second solve."""
+    contact_set = state.contact_set
+    node_i = state.node_i
+    p = state.node_pos
+    v = state.node_vel
+    body_state = state.body_state
+    # the broad phase: in a step the integrator accepts neither the node nor the COG moves faster than the speed
+    # limit (beyond it the step fails), so a node farther than 2 h v_limit outside the sphere cannot reach it
+    body_m = bounding_radius_m(model.contact_shape)
+    body2 = body_m * body_m
+    far = body_m + 2.0 * h * model.env_f[EF_SPEED_LIMIT]
+    far2 = far * far
+    gx = body_state[BS_POS]
+    gy = body_state[BS_POS + 1]
+    gz = body_state[BS_POS + 2]
+    seabed_z = -model.env_f[EF_DEPTH]
+    k = 0
+    for n in range(node_i.shape[0]):
+        dz = p[n, 2] - gz
+        if dz * dz > far2:
+            continue
+        dx = p[n, 0] - gx
+        dy = p[n, 1] - gy
+        r2 = dx * dx + dy * dy + dz * dz
+        if r2 > far2 or node_i[n, NI_KIND] != NODE_FREE or p[n, 2] < seabed_z:
+            continue
+        mode = SET_OUT
+        if r2 <= body2 and within_reach(p[n, 0], p[n, 1], p[n, 2], body_state, model.contact_shape):
+            if surface_distance(p[n, 0], p[n, 1], p[n, 2], body_state, model.contact_shape)[0] < 0.0:
+                mode = SET_IN
+        if mode == SET_OUT:
+            wx, wy, wz = relative_velocity(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2], body_state)
+            reach = h * math.sqrt(wx * wx + wy * wy + wz * wz)
+            if within_reach(p[n, 0], p[n, 1], p[n, 2], body_state, model.contact_shape, reach):
+                sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(p[n, 0], p[n, 1], p[n, 2], body_state,
+                                                                       model.contact_shape)
+                if predicted_depth(h, -sd, nx, ny, nz, wx, wy, wz, 0.0, 0.0, 0.0) > DEPTH_TOLERANCE_M:
+                    mode = SET_COMING
+        contact_set[k] = (n << SET_BITS) | mode
+        k += 1
+    if k < contact_set.shape[0]:
+        contact_set[k] = -1
+
+
+@jit_no_refcount
+def update_contact_set(h, model, state):
+    """After a solve (``node_acc`` = dv): candidates outside predicted inside at the end of the step enter the set,
+    nodes inside predicted outside leave it, each once per step. Returns how many changed."""
+    contact_set = state.contact_set
+    p = state.node_pos
+    v = state.node_vel
+    dv = state.node_acc
+    changed = 0
+    for k in range(contact_set.shape[0]):
+        n, mode = candidate(contact_set, k)
+        if n < 0:
+            break
+        if mode == SET_ENTERED or mode == SET_LEFT:
+            continue
+        wx, wy, wz = relative_velocity(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2], state.body_state)
+        # reach: how far the node can move against the anchor in the step
+        reach = h * (math.sqrt(wx * wx + wy * wy + wz * wz)
+                     + math.sqrt(dv[n, 0] * dv[n, 0] + dv[n, 1] * dv[n, 1] + dv[n, 2] * dv[n, 2]))
+        if not within_reach(p[n, 0], p[n, 1], p[n, 2], state.body_state, model.contact_shape, reach):
+            continue
+        depth, nx, ny, nz, wx, wy, wz = contact_state(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2],
+                                                      state.body_state, model.contact_shape)
+        end = predicted_depth(h, depth, nx, ny, nz, wx, wy, wz, dv[n, 0], dv[n, 1], dv[n, 2])
+        if (mode == SET_OUT or mode == SET_MISSED) and end > DEPTH_TOLERANCE_M:
+            mode = SET_ENTERED
+        elif mode == SET_IN and end < -DEPTH_TOLERANCE_M:
+            mode = SET_LEFT
+        elif mode == SET_COMING and end < -DEPTH_TOLERANCE_M:
+            mode = SET_MISSED
+        else:
+            continue
+        contact_set[k] = (n << SET_BITS) | mode
+        changed += 1
+    return changed
