@@ -255,10 +255,12 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
                 f"(median), {ref['speedup_median']:.0f}x the Newton solver's time (least {ref['speedup_min']:.0f}x)."
                 if ref.get("scenes") else "No relaxation-solver comparison in this run.")
     fb = s["fallback"]
+    cpu_timed = any("solve_wall_s" in r for r in result["records"])
     times = ", ".join("stopped" if t is None or t != t else f"{t:g} s" for t in fb["solve_s"])
+    ran = (f"CPU time {times} (stopped: not finished within {result.get('fallback_limit_s', math.nan):g} s of wall "
+           "time)" if cpu_timed else f"it ran {times} (stopped at {result.get('fallback_limit_s', math.nan):g} s)")
     fb_text = (f"The fallback (`solve_statics` with `method=\"auto\"`) on the first {fb['scenes']} scenes that "
-               f"need it: {fb['converged']} converged; CPU time {times} (stopped: not finished within "
-               f"{result.get('fallback_limit_s', math.nan):g} s of wall time)." if fb["scenes"]
+               f"need it: {fb['converged']} converged; {ran}." if fb["scenes"]
                else "No scene needed the fallback.")
     mp = s["moorpy"]
     calm_text = (f"In calm water ({mp['calm_scenes']} scenes) its release point is within "
@@ -274,12 +276,13 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
                f"({mp['moorpy_one_solve_median_ms']:.0f} ms "
                f"for one equilibrium solve), in the same process."
                if mp.get("scenes") else "No MoorPy comparison in this run.")
-    line = run_line(result, COMMAND) + CLOCK_TEXT
+    line = run_line(result, COMMAND) + (CLOCK_TEXT if cpu_timed else "")
     doc = (f"{main}\n\nScenes refused or needing the fallback, by cause:\n\n{causes}\n\n{fb_text}\n\n"
            f"{cmp_text}\n\n{mp_text}\n\n{line}")
     a = s["all"]
+    cpu = " of CPU time" if cpu_timed else ""
     readme = (f"Hanging equilibrium by Newton's method in {a['solve_ms']['median']:.1f} ms median, "
-              f"{a['solve_ms']['p99']:.0f} ms p99 of CPU time from a compiled scene; "
+              f"{a['solve_ms']['p99']:.0f} ms p99{cpu} from a compiled scene; "
               f"{a['converged']} of {a['scenes']} drawn scenes "
               f"converge, {a['no_equilibrium'] + a['refused_by_config']} are refused as having none, "
               f"{a['needs_fallback']} are not solved by Newton's method (`{COMMAND}`, {result['date'][:10]}; "
