@@ -60,15 +60,21 @@ def _run_meta(run: Path) -> list[dict]:
     return out
 
 
+# what the evaluation itself writes: a change there is its own output, not an edit of the evaluated code
+OUTPUTS = ("benchmarks/results/", "docs/", "README.md")
+
+
 def _source_commit() -> str | None:
-    """The commit of the evaluated code, None outside a git checkout (``+dirty`` where files differ from it)."""
+    """The commit of the evaluated code, None outside a git checkout (``+dirty`` where files other than the
+    evaluation's own outputs differ from it)."""
     try:
         head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True, check=True)
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT,
-                               capture_output=True, text=True, check=True)
+        status = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT,
+                                capture_output=True, text=True, check=True)
     except (OSError, subprocess.CalledProcessError):
         return None
-    return head.stdout.strip() + ("+dirty" if dirty.stdout.strip() else "")
+    edited = [line[3:] for line in status.stdout.splitlines() if not line[3:].startswith(OUTPUTS)]
+    return head.stdout.strip() + ("+dirty" if edited else "")
 
 
 def evaluate(run: Path, sites: int, jobs: int, progress: bool = True) -> dict:
@@ -221,7 +227,7 @@ def _short(commit: str | None) -> str:
     """``21410d2`` of a full commit hash, with `` with edits`` where the tree differed from it."""
     if not commit:
         return "an unknown commit"
-    return commit[:7] + (" with edits to the evaluation script" if commit.endswith("+dirty") else "")
+    return commit[:7] + (" with edits" if commit.endswith("+dirty") else "")
 
 
 def _added_line(meta: dict) -> str:
