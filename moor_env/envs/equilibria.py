@@ -2,10 +2,9 @@
 
 Every reset solves the equilibrium of its scenario's statics scene with :func:`moor_env.solve_statics`, from
 the scene's compiled model (:meth:`~moor_env.envs.scene.SceneFactory.compiled`, which the episode's model is
-derived from). On the default config in calm water, without current, a reset on a new geometry costs a median
-6.6 ms, of which the solve is 2.5 ms on average and the compile most of the rest (``benchmarks/bench_env.py
---variant fresh-geometry``, 40 episodes on a 2-core machine; the whole episode 51 ms, 35 ms of it the fall). A
-geometry without an equilibrium is refused at once (:class:`~moor_env.errors.NoEquilibrium`) and the reset draws
+derived from). On the default config in calm water, without current, a reset on a new geometry costs a few
+milliseconds, the solve and the compile about half each (``benchmarks/bench_env.py --variant fresh-geometry``
+measures the reset, the solve and the whole episode: docs/env-speed.md). A geometry without an equilibrium is refused at once (:class:`~moor_env.errors.NoEquilibrium`) and the reset draws
 again (:func:`~moor_env.envs.scenario.start_episode`).
 
 Kept: an in-memory LRU of the last ``statics.memory_entries`` (64) equilibria, shared by the envs of a process,
