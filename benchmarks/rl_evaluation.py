@@ -139,14 +139,18 @@ def confirm_run(run: Path, sites: int, jobs: int, progress: bool = True) -> dict
     return data["confirmation"]
 
 
+def _versus_crew(stats: dict, run: str) -> tuple[dict | None, dict]:
+    """A trained run's IQM over its seeds (None for a single policy) and its paired difference to the crew."""
+    return stats["seeds"].get(run), next(c for c in stats["paired"] if c["a"] == run and c["b"] == "crew")
+
+
 def _confirmation_text(data: dict) -> str:
     """`` On a second held-out set ...`` where the results hold a confirmation, else ``""``."""
     conf = data.get("confirmation")
     if not conf:
         return ""
     stats, run = conf["statistics"], conf["run"]
-    seeds = stats["seeds"][run]
-    diff = next(c for c in stats["paired"] if c["a"] == run and c["b"] == "crew")
+    seeds, diff = _versus_crew(stats, run)
     return (f"On a second held-out set of {conf['sites']} sites (`--confirm {conf['sites']}`, drawn the same way with "
             f"another seed, looked at by no design choice; code at {_short(conf.get('source_commit'))}): `{run}` "
             f"IQM {100 * seeds['iqm']:.1f} % [{100 * seeds['ci'][0]:.1f}, {100 * seeds['ci'][1]:.1f}] %, crew "
@@ -170,10 +174,8 @@ def _pct(x: float) -> str:
 def headline(data: dict) -> str:
     """The README's RL line: the trained run's IQM, the crew, the paired difference, the optimiser."""
     meta, stats = data["meta"], data["statistics"]
-    run = meta["trained_run"]["name"]
-    seeds = stats["seeds"][run]
+    seeds, diff = _versus_crew(stats, meta["trained_run"]["name"])
     success = stats["success"]
-    diff = next(c for c in stats["paired"] if c["a"] == run and c["b"] == "crew")
     return (f"**RL** (AnchorPlan-v1, {meta['sites']} held-out sites, every policy on the same ones): SAC trained "
             f"with {seeds['runs']} seeds succeeds on {_pct(seeds['iqm'])} (IQM, 95 % interval "
             f"[{100 * seeds['ci'][0]:.0f}, {100 * seeds['ci'][1]:.0f}] %), the crew's rule of thumb on "
@@ -199,7 +201,7 @@ def _confirmation_headline(data: dict) -> str:
     conf = data.get("confirmation")
     if not conf:
         return ""
-    diff = next(c for c in conf["statistics"]["paired"] if c["a"] == conf["run"] and c["b"] == "crew")
+    _, diff = _versus_crew(conf["statistics"], conf["run"])
     return (f"; on a second held-out set of {conf['sites']} sites trained minus crew {100 * diff['difference']:+.1f} "
             f"points [{100 * diff['ci'][0]:+.1f}, {100 * diff['ci'][1]:+.1f}]")
 
