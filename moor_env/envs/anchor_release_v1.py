@@ -23,7 +23,7 @@ from moor_env.envs.positioning import (
     release_decision,
 )
 from moor_env.envs.render import snapshot
-from moor_env.envs.site import SITE_OBS_NAMES, SITE_OBS_OFFSET, SITE_OBS_SCALE
+from moor_env.envs.site import SITE_OBS_NAMES
 from moor_env.errors import ConfigError, NoEquilibrium, StaticsNotConverged
 
 # (name, unit, offset, scale) of the entries after the site's: observation = (raw - offset) / scale, clipped
@@ -42,8 +42,8 @@ STATE_OBS_SPEC: tuple[tuple[str, str, float, float], ...] = (
 )
 OBS_NAMES_V1: tuple[str, ...] = (*SITE_OBS_NAMES, *(row[0] for row in STATE_OBS_SPEC))
 OBS_CLIP_V1 = 5.0
-_OFFSET = np.concatenate([SITE_OBS_OFFSET, [row[2] for row in STATE_OBS_SPEC]])
-_SCALE = np.concatenate([SITE_OBS_SCALE, [row[3] for row in STATE_OBS_SPEC]])
+_STATE_OFFSET = np.array([row[2] for row in STATE_OBS_SPEC])
+_STATE_SCALE = np.array([row[3] for row in STATE_OBS_SPEC])
 
 
 class AnchorReleaseV1Env(gym.Env):
@@ -159,7 +159,7 @@ class AnchorReleaseV1Env(gym.Env):
         self.statics: dict[str, float] = {}
         self.steps = 0
         self.armed = 0
-        self._site_obs = np.zeros(len(SITE_OBS_NAMES))
+        self._site_obs = np.zeros(len(SITE_OBS_NAMES), np.float32)
         self._refused = False
         self._done = True
         self._installed = False
@@ -170,7 +170,7 @@ class AnchorReleaseV1Env(gym.Env):
         options = dict(options or {})
         start = options.pop("levers", None)
         site_obs, info = self.plan.reset(seed=int(self.np_random.integers(2**31 - 1)), options=options)
-        self._site_obs = site_obs.astype(np.float64) * SITE_OBS_SCALE + SITE_OBS_OFFSET
+        self._site_obs = site_obs
         self.steps, self.armed, self._refused, self._done, self._installed = 0, 0, False, False, False
         draws = self._draw_start() if start is None else self._fixed_start(start)
         info.update(levers=dict(self.levers), statics=dict(self.statics), start_draws=draws)
@@ -285,7 +285,8 @@ class AnchorReleaseV1Env(gym.Env):
         pos = self.cfg.positioning
         fractions = lever_fractions(self.levers, self._depth_m, self.cfg.levers, *self._vessel_geometry())
         st = self.statics
-        raw = np.array([*self._site_obs, *fractions, st["mooring_line_tension_ratio"], st["wire_load_ratio"],
-                        st["fibre_clearance_m"], st["tilt_deg"], 1.0 - self.steps / pos.max_steps,
-                        self.armed / pos.release_confirm_steps, float(self._refused)])
-        return np.clip((raw - _OFFSET) / _SCALE, -OBS_CLIP_V1, OBS_CLIP_V1).astype(np.float32)
+        raw = np.array([*fractions, st["mooring_line_tension_ratio"], st["wire_load_ratio"], st["fibre_clearance_m"],
+                        st["tilt_deg"], 1.0 - self.steps / pos.max_steps, self.armed / pos.release_confirm_steps,
+                        float(self._refused)])
+        state = np.clip((raw - _STATE_OFFSET) / _STATE_SCALE, -OBS_CLIP_V1, OBS_CLIP_V1).astype(np.float32)
+        return np.concatenate([self._site_obs, state])
