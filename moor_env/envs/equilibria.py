@@ -4,8 +4,9 @@ Every reset solves the equilibrium of its scenario's statics scene with :func:`m
 the scene's compiled model (:meth:`~moor_env.envs.scene.SceneFactory.compiled`, which the episode's model is
 derived from). On the default config in calm water, without current, a reset on a new geometry costs a few
 milliseconds, the solve and the compile about half each (``benchmarks/bench_env.py --variant fresh-geometry``
-measures the reset, the solve and the whole episode: docs/env-speed.md). A geometry without an equilibrium is refused at once (:class:`~moor_env.errors.NoEquilibrium`) and the reset draws
-again (:func:`~moor_env.envs.scenario.start_episode`).
+measures the reset, the solve and the whole episode: docs/env-speed.md). A geometry without an equilibrium is
+refused at once (:class:`~moor_env.errors.NoEquilibrium`) and the reset draws again
+(:func:`~moor_env.envs.scenario.start_episode`).
 
 Kept: an in-memory LRU of the last ``statics.memory_entries`` (64) equilibria, shared by the envs of a process,
 with their compiled models in the scene factory. A geometry drawn again (an evaluation set, a fixed

@@ -21,7 +21,7 @@ a 60 s step at most.
 
 :func:`steps_to_reach` says how many steps take every lever across its whole range; the default config reaches
 any target from any start within its step limit with steps to spare for the release decision
-(``tests/envs/test_anchor_release_v1.py``).
+(``tests/envs/test_release_v1.py``).
 """
 
 from __future__ import annotations

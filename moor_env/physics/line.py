@@ -1,13 +1,13 @@
 """Lumped-mass lines: axial elasticity (tension only), internal damping, Morison loads, weight, payout.
 
-Each segment is an axial spring-damper between two nodes (MoorDyn ``Line::getStateDeriv``; seed 003, Landhaug
-2015, *Dynamic Simulation of Dart Anchor Installation*, section 2.3, uses beams, a chain has EI ~ 0). Tension is EA * strain + BA * strain rate with
-BA = zeta * l0 * sqrt(EA * w) (zeta is the damping ratio of one segment's axial mode), and is never
-negative: a slack segment (stretched length <= l0) carries nothing, and a straightening slack segment is not
-damped. (The static solver's first phase replaces the kink at zero strain by the smooth
-EA (strain + sqrt(strain^2 + s^2)) / 2, then polishes with the exact law.) Half of each segment's mass, net
-weight, drag and added mass go to each end node; the drag of each half uses that end node's velocity and the
-segment's tangent, which damps odd-even node modes too.
+Each segment is an axial spring-damper between two nodes (MoorDyn ``Line::getStateDeriv``; seed 003, Landhaug 2015,
+*Dynamic Simulation of Dart Anchor Installation*, section 2.3, uses beams, a chain has EI ~ 0). Tension is EA *
+strain + BA * strain rate with BA = zeta * l0 * sqrt(EA * w) (zeta is the damping ratio of one segment's axial
+mode), and is never negative: a slack segment (stretched length <= l0) carries nothing, and a straightening slack
+segment is not damped. (The static solver's first phase replaces the kink at zero strain by the smooth EA (strain +
+sqrt(strain^2 + s^2)) / 2, then polishes with the exact law.) Half of each segment's mass, net weight, drag and
+added mass go to each end node; the drag of each half uses that end node's velocity and the segment's tangent, which
+damps odd-even node modes too.
 
 Payout: the top segment's unstretched length changes at the winch rate; above ``L_MAX_TOP`` it splits
 (a new node at ``L_NOM`` from the node below), below ``L_MIN_TOP`` it merges with the segment below. Mass
