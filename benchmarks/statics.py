@@ -4,7 +4,8 @@ Draws scenes from the gjoa-500 installation with depth 300-1500 m, vessel spacin
 0.95-1.3 depth, vertical chain 5-60 m, drop height 30-120 m, current scale 0-1.5 in any direction, anchor mass
 +-10 % and a fidelity preset each (seeded). For each: the time to compile the scene and the time from the compiled
 model to the result by Newton's method (one core, kernels compiled beforehand, no fallback), and whether it
-converged, was refused as having no equilibrium (with its cause) or needs the fallback. Where it needs it, the
+converged (and whether a line rests on the anchor there), was refused as having no equilibrium (with its cause),
+is unsolved with a line resting on the anchor (no fallback is run there) or needs the fallback. Where it needs it, the
 first ``--fallback`` of those scenes are solved again with the fallback (in a worker process, ``--fallback-limit``
 seconds at most each). On the first ``--reference`` converged scenes of the fast and default presets the
 relaxation solver (``moor_env/physics/statics_relaxation.py``) runs too (same limit), and on the first ``--moorpy``
@@ -38,6 +39,7 @@ from _machine import run_record  # noqa: E402
 from moor_env import load_scene  # noqa: E402
 from moor_env.compile import compile_scene  # noqa: E402
 from moor_env.errors import ConfigError, NoEquilibrium, SimulationDiverged, StaticsNotConverged  # noqa: E402
+from moor_env.physics import layout as L  # noqa: E402
 from moor_env.simulation import solve_statics  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -47,6 +49,7 @@ README = ROOT / "README.md"
 FIGURE = ROOT / "docs" / "statics-times.png"
 PRESETS = ("fast", "default", "accurate")
 COMMAND = "python benchmarks/statics.py"
+ON_ANCHOR = "unsolved on the anchor"
 
 
 def draw_scene(rng: np.random.Generator) -> dict:
@@ -93,11 +96,14 @@ def run_scene(overrides: dict) -> dict:
     try:
         result = solve_statics(model, progress=False, method="newton")
         record.update(outcome="converged", iterations=result.iterations, release_point_m=result.release_point_m,
-                      top_tensions_n=result.top_tensions_n)
+                      top_tensions_n=result.top_tensions_n,
+                      nodes_on_anchor=int(result.simulator.work.contact_out[L.CO_NODES]))
     except NoEquilibrium as exc:
         record.update(outcome="no equilibrium", cause=exc.cause)
     except (StaticsNotConverged, SimulationDiverged) as exc:
-        record.update(outcome="needs the fallback", cause=str(exc))
+        # with a line resting on the anchor the fallback is not run (moor_env.physics.statics.solve_equilibrium)
+        record.update(outcome=ON_ANCHOR if getattr(exc, "line_on_anchor", False) else "needs the fallback",
+                      cause=str(exc))
     record.update(solve_s=CLOCK() - t0, solve_wall_s=time.perf_counter() - w0)
     if record["outcome"] == "converged":  # timed again: a rare path's kernel compiles on its first use
         model = compile_scene(scene)
@@ -172,13 +178,15 @@ def summarize(records: list[dict]) -> dict:
             "no_equilibrium": sum(r["outcome"] == "no equilibrium" for r in rows),
             "refused_by_config": sum(r["outcome"] == "refused by the config" for r in rows),
             "needs_fallback": sum(r["outcome"] == "needs the fallback" for r in rows),
+            "resting_on_anchor": sum(r.get("nodes_on_anchor", 0) > 0 for r in done),
+            "unsolved_on_anchor": sum(r["outcome"] == ON_ANCHOR for r in rows),
             "solve_ms": _quantiles(solve),
             "with_compile_ms": _quantiles(total),
             "iterations_median": float(np.median([r["iterations"] for r in done])) if done else None,
         }
     causes: dict = {}
     for r in records:
-        if r["outcome"] in ("no equilibrium", "needs the fallback"):
+        if r["outcome"] in ("no equilibrium", "needs the fallback", ON_ANCHOR):
             key = f"{r['outcome']}: {r['cause'].split(' (')[0].split(':')[0]}"
             causes[key] = causes.get(key, 0) + 1
     out["causes"] = causes
@@ -241,11 +249,13 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
     for preset in (*PRESETS, "all"):
         p = s[preset]
         q, c = p["solve_ms"], p["with_compile_ms"]
-        rows.append([preset, p["scenes"], p["converged"], p["needs_fallback"], p["no_equilibrium"],
-                     p["refused_by_config"], *(f"{q.get(k, math.nan):.1f}" for k in ("median", "p90", "p99", "max")),
+        rows.append([preset, p["scenes"], p["converged"], p.get("resting_on_anchor", 0), p["needs_fallback"],
+                     p.get("unsolved_on_anchor", 0), p["no_equilibrium"], p["refused_by_config"],
+                     *(f"{q.get(k, math.nan):.1f}" for k in ("median", "p90", "p99", "max")),
                      f"{c.get('median', math.nan):.1f}",
                      f"{p['iterations_median']:.0f}" if p["iterations_median"] is not None else "-"])
-    main = table(["preset", "scenes", "Newton converged", "needs the fallback", "no equilibrium", "refused by config",
+    main = table(["preset", "scenes", "Newton converged", "of them resting on the anchor", "needs the fallback",
+                  "unsolved on the anchor", "no equilibrium", "refused by config",
                   "median ms", "p90 ms", "p99 ms", "max ms", "median ms with compile", "median iterations"], rows)
     ref = s["reference"]
     causes = "\n".join(f"- {k}: {v}" for k, v in sorted(s["causes"].items())) or "- none"
@@ -277,15 +287,17 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
                f"for one equilibrium solve), in the same process."
                if mp.get("scenes") else "No MoorPy comparison in this run.")
     line = run_line(result, COMMAND) + (CLOCK_TEXT if cpu_timed else "")
-    doc = (f"{main}\n\nScenes refused or needing the fallback, by cause:\n\n{causes}\n\n{fb_text}\n\n"
+    doc = (f"{main}\n\nScenes refused or not solved by Newton's method, by cause:\n\n{causes}\n\n{fb_text}\n\n"
            f"{cmp_text}\n\n{mp_text}\n\n{line}")
     a = s["all"]
     cpu = " of CPU time" if cpu_timed else ""
     readme = (f"Hanging equilibrium by Newton's method in {a['solve_ms']['median']:.1f} ms median, "
               f"{a['solve_ms']['p99']:.0f} ms p99{cpu} from a compiled scene; "
               f"{a['converged']} of {a['scenes']} drawn scenes "
-              f"converge, {a['no_equilibrium'] + a['refused_by_config']} are refused as having none, "
-              f"{a['needs_fallback']} are not solved by Newton's method (`{COMMAND}`, {result['date'][:10]}; "
+              f"converge ({a.get('resting_on_anchor', 0)} with the loop resting on the anchor), "
+              f"{a['no_equilibrium'] + a['refused_by_config']} are refused as having none, "
+              f"{a['needs_fallback'] + a.get('unsolved_on_anchor', 0)} are not solved by Newton's method "
+              f"(`{COMMAND}`, {result['date'][:10]}; "
               f"[docs/statics.md](docs/statics.md)).")
     return [(DOC, "statics", doc), (README, "statics", readme)]
 

@@ -5,17 +5,13 @@ contact only where the chain behind the anchor can reach it during the fall, by 
 ``physics/contact_setup.chain_catch_up`` (the seed's chain with C_D,T 0.0069 gains 7 m on the DPA over a 68.5 m
 drop; with the DNV 0.4456 it falls behind). Where it is off the kernels skip it and lines pass through the anchor.
 
-The static solver leaves the contact out (:func:`without_line_anchor_contact`): its Newton iteration couples the
-anchor to the lines through their attachment only, and a node resting on the anchor would couple them again, a
-stiff loop its block elimination cannot take. Where a hanging equilibrium puts a line through the anchor (the
-loop hanging beside the vertical chain, mostly at vessel spacings below a fifth of the depth), ``solve_statics``
-refuses it (``physics/statics_guess.check_anchor_clearance``): a fall from it would start with the contact throwing
-the line out of the body.
+Where it is on, the hanging equilibrium includes it too (``physics/statics_contact.py``): the loop that hangs
+beside the vertical chain (mostly at vessel spacings below a fifth of the depth) rests against the anchor, and a
+fall starts from that rest state.
 """
 
 from __future__ import annotations
 
-import functools
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -67,20 +63,3 @@ def contact_arrays(scene: SceneConfig, props: AnchorProperties | None) -> tuple[
     shape = anchor_shape([s.length_m for s in scene.anchor.sections],
                          [s.outer_diameter_m for s in scene.anchor.sections], props.s_tip_m)
     return contact_f, shape
-
-
-def without_line_anchor_contact(solve):
-    """Decorate a static solve ``solve(sim, ...)`` to run with the simulator's line-anchor contact off (module
-    docstring); the model's ``contact_f`` is restored afterwards, whatever the solve raises."""
-
-    @functools.wraps(solve)
-    def wrapper(sim, *args, **kwargs):
-        contact_f = sim.model.contact_f
-        saved = contact_f[L.CF_ON]
-        contact_f[L.CF_ON] = 0.0
-        try:
-            return solve(sim, *args, **kwargs)
-        finally:
-            contact_f[L.CF_ON] = saved
-
-    return wrapper

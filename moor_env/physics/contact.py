@@ -33,7 +33,7 @@ point whose velocity enters w, so the contact's power is -F . w: the spring stor
 Jacobians (:func:`node_contact`): dF/dx and dF/dv, exact (including the turning of the normal, the body's rotation
 and the friction's dependence on the normal force; checked against central differences), the body's state held
 fixed. The implicit step (``implicit_contact.py``) takes their symmetric, positive part: k n n^T and the damping.
-The static solver leaves the contact out (``moor_env.contact_model``).
+The static solver takes k n n^T and its coupling to the anchor (``statics_contact.py``).
 
 The numbers (stiffness, restitution, friction) and the shape are chosen in ``physics/contact_setup.py``.
 """

@@ -9,30 +9,33 @@ every line in the discrete model's own equilibrium without current, a grounded l
 touchdown nodes, excess line laid on the seabed. The calm equilibrium takes a few iterations; the scene's current
 is then applied in one stage, solved as pseudo time stepping that turns into Newton's method. Where that stage
 does not converge within a hundred iterations, the current is applied in increments from the calm equilibrium
-instead, and where those do not reach it, in one long stage. The lines' contact
-with the anchor's body is not part of the static problem (``contact_model.without_line_anchor_contact``); where the
-scene models it, ``simulation.solve_statics`` refuses an equilibrium that puts a line through the anchor
-(``statics_guess.check_anchor_clearance``).
+instead, and where those do not reach it, in one long stage.
+
+Where the scene models the lines' contact with the anchor's body (``contact_model``), it is part of the static
+problem (``physics/statics_contact.py``): a loop that hangs beside the vertical chain rests against the anchor and
+pushes it aside. The first guess hangs the lines as if the anchor were not there; where it puts a line inside the
+anchor, the calm problem is first solved with the contact's stiffness raised in decades from a hundred-thousandth
+of its own (``CONTACT_RAMP``), so that the line is pushed out gradually and the loop follows.
 
 All of it runs on the tension-only law smoothed at strain scale ``SMOOTHING_FINAL`` (it differs from the exact law
 by less than EA 1e-8 / 2 on a segment at zero strain, far less elsewhere) and the exact seabed contact.
 :func:`solve_equilibrium` finishes with the slow solver of ``physics/statics_relaxation.py`` where Newton's method
-does not converge (``method="auto"``), except where it did not converge in the current from a calm equilibrium
-that puts a line through the anchor of a scene that models their contact: that scene is refused.
+does not converge (``method="auto"``), except where a line rests on the anchor: the relaxation does not converge
+there either, so the solve stops with the vessel spacing named as the key to change.
 """
 
 from __future__ import annotations
 
+import contextlib
 import time
 
 import numpy as np
 from tqdm.auto import tqdm
 
-from moor_env.contact_model import without_line_anchor_contact
 from moor_env.errors import ConfigError, SimulationDiverged, StaticsNotConverged
 from moor_env.physics import layout as L
 from moor_env.physics import statics_relaxation
-from moor_env.physics.statics_guess import anchor_intrusion, first_guess, refuse_anchor_intrusion
+from moor_env.physics.statics_guess import deepest_inside_anchor, first_guess
 from moor_env.physics.statics_newton import (
     C_CAP,
     C_CUTS,
@@ -67,6 +70,7 @@ STAGE_ITERATIONS = 40  # iterations of one current increment before it is retrie
 EASY_STAGE = 8  # an increment solved in this many iterations doubles the next (in twice as many, keeps it)
 SMALLEST_CURRENT_STEP = 1.0 / 256.0  # of the scene's current scale
 PROGRESS_AFTER_S = 1.0
+CONTACT_RAMP = (1e-5, 1e-4, 1e-3, 1e-2, 1e-1)  # shares of the contact stiffness before its own
 METHODS = ("auto", "newton", "relaxation")
 
 
@@ -92,39 +96,69 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS
     ``method``: "auto" runs :func:`solve_newton` and, where it does not converge, the slow, robust solver of
     ``physics/statics_relaxation.py`` from the same start; "newton" and "relaxation" run one of them only.
     Other parameters and exceptions as :func:`solve_newton`; the report's ``method`` says which solver finished.
-    Where Newton's method does not converge in the current from a calm equilibrium that puts a line through the
-    anchor, and the scene models their contact, the scene is refused instead
-    (:func:`moor_env.physics.statics_guess.refuse_anchor_intrusion`): no fallback is run.
+
+    Where the scene models the line-anchor contact, the lines are solved without it first: an equilibrium with no
+    line inside the anchor is one of the contact problem too (every contact force is zero), and most scenes have
+    one. Where a line ends inside the anchor, or that solve does not converge, the contact problem is solved
+    (from a warm start that already rests on the anchor, at once). Where it does not converge with a line resting
+    on the anchor, no fallback is run (the relaxation does not reach those either, in minutes):
+    :class:`StaticsNotConverged` names the vessel spacing.
     """
     if method not in METHODS:
         raise ConfigError("method", method, "one of " + ", ".join(METHODS))
-    return _equilibrium(sim, tol_rel, max_iter, max_step_m, warm, analytic_guess, progress, method,
-                        bool(sim.model.contact_f[L.CF_ON] != 0.0))
-
-
-@without_line_anchor_contact
-def _equilibrium(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, analytic_guess: bool,
-                 progress: bool, method: str, contact_modelled: bool) -> StaticsReport:
     start = sim.state.copy()
-    try:
-        if method == "relaxation":
-            raise StaticsNotConverged("the relaxation solver was asked for")
-        return solve_newton(sim, tol_rel, max_iter, max_step_m, warm, analytic_guess, progress)
-    except (StaticsNotConverged, SimulationDiverged) as exc:
-        calm = getattr(exc, "calm_intrusion", None)
-        if contact_modelled and calm is not None:
-            refuse_anchor_intrusion(sim, *calm, calm_unsolved=True)
-        if method == "newton":
-            raise _as_not_converged(exc) from exc
+    if method != "relaxation":
+        report = _by_newton(sim, start, method, (tol_rel, max_iter, max_step_m, warm, analytic_guess, progress))
+        if report is not None:
+            return report
         _restore(sim.state, start)
-        sim.state.t = start.t
+    with _contact_off(sim):
+        try:
+            with tqdm(desc="statics (relaxation)", unit="s relaxed", disable=not progress, leave=False,
+                      delay=PROGRESS_AFTER_S) as bar:
+                return statics_relaxation.solve_equilibrium(sim, tol_rel=tol_rel, warm=warm,
+                                                            analytic_guess=analytic_guess, tick=bar.update)
+        except SimulationDiverged as exc:
+            raise _as_not_converged(exc) from exc
+
+
+def _by_newton(sim, start, method: str, args: tuple) -> StaticsReport | None:
+    """:func:`solve_newton` without the line-anchor contact, then with it where needed (:func:`solve_equilibrium`);
+    None where the fallback is to run. ``start``: the state to go back to; ``args``: solve_newton's from tol_rel
+    to progress."""
+    contact = bool(sim.model.body_active and sim.model.contact_f[L.CF_ON] != 0.0)
+    warm = args[3]
+    if contact and warm and _line_inside_anchor(sim):
+        return solve_newton(sim, *args, contact=True)
+    failure = None
     try:
-        with tqdm(desc="statics (relaxation)", unit="s relaxed", disable=not progress, leave=False,
-                  delay=PROGRESS_AFTER_S) as bar:
-            return statics_relaxation.solve_equilibrium(sim, tol_rel=tol_rel, warm=warm,
-                                                        analytic_guess=analytic_guess, tick=bar.update)
-    except SimulationDiverged as exc:
-        raise _as_not_converged(exc) from exc
+        report = solve_newton(sim, *args, contact=False)
+        if not (contact and _line_inside_anchor(sim)):
+            return report
+    except (StaticsNotConverged, SimulationDiverged) as exc:
+        failure = exc
+    if contact:
+        _restore(sim.state, start)
+        try:
+            return solve_newton(sim, *args, contact=True)
+        except (StaticsNotConverged, SimulationDiverged) as exc:
+            if method == "newton" or failure is None or getattr(exc, "line_on_anchor", False):
+                raise _as_not_converged(exc) from exc
+    if method == "newton":
+        raise _as_not_converged(failure) from failure
+    return None
+
+
+@contextlib.contextmanager
+def _contact_off(sim):
+    """The simulator's line-anchor contact off for the block, restored whatever it raises."""
+    contact_f = sim.model.contact_f
+    saved = contact_f[L.CF_ON]
+    contact_f[L.CF_ON] = 0.0
+    try:
+        yield
+    finally:
+        contact_f[L.CF_ON] = saved
 
 
 def _as_not_converged(exc: Exception) -> StaticsNotConverged:
@@ -137,6 +171,7 @@ def _as_not_converged(exc: Exception) -> StaticsNotConverged:
 def _restore(st, saved) -> None:
     for name in ("node_pos", "node_vel", "body_state", "seg_f", "line_f"):
         getattr(st, name)[...] = getattr(saved, name)
+    st.t = saved.t
 
 
 def _stop(st) -> None:
@@ -200,16 +235,17 @@ class _Stage:
             self.bar.close()
 
 
-@without_line_anchor_contact
 def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max_step_m: float = 20.0,
-                 warm: bool = False, analytic_guess: bool = True, progress: bool = True) -> StaticsReport:
+                 warm: bool = False, analytic_guess: bool = True, progress: bool = True,
+                 contact: bool = True) -> StaticsReport:
     """Drive the simulator's current state to static equilibrium in place by Newton's method.
 
     The calm equilibrium is solved first from the guess, then the scene's current in one stage of at most
     ``SHORT_STAGE`` iterations; where that stage does not converge, the current is applied again from the calm
     equilibrium in increments (``INCREMENT_ITERATIONS`` at most), each solved to ``STAGE_TOLERANCE``, halved or
     doubled by how hard the last one was, and where they do not reach it, in one stage with the iterations left.
-    The lines' contact with the anchor's body is left out (``contact_model``).
+    Where the first guess puts a line inside the anchor, the calm stage is preceded by the contact's stiffness
+    ramp (module docstring).
 
     Parameters
     ----------
@@ -229,6 +265,8 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max
         from the current state, however poor.
     progress : bool
         Show a progress bar once a solve has taken more than a second.
+    contact : bool
+        Solve with the line-anchor contact where the scene models it; False leaves it out.
 
     Raises
     ------
@@ -236,6 +274,12 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max
     moor_env.errors.NoEquilibrium
         From the first guess: the scene has no equilibrium (named cause and key).
     """
+    with contextlib.nullcontext() if contact else _contact_off(sim):
+        return _newton(sim, tol_rel, max_iter, max_step_m, warm, analytic_guess, progress)
+
+
+def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, analytic_guess: bool,
+            progress: bool) -> StaticsReport:
     n_dofs = n_static_dofs(sim)
     if n_dofs == 0:  # nothing to solve (e.g. an anchor held at its drop height, no lines)
         return StaticsReport(0, 0.0, 0.0, 0, "newton")
@@ -248,14 +292,15 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max
     stage = _Stage(sim, ctl, max_iter, progress, warm)
     sim.env_f[L.EF_SLACK_SMOOTHING] = SMOOTHING_FINAL
     sim.env_f[L.EF_SEABED_SMOOTHING] = 0.0
-    calm_intrusion = None
+    on_anchor = not warm and _line_inside_anchor(sim)
     try:
         calm = 0.0 if current > 0.0 and not warm else current
+        if on_anchor:
+            _stiffen_contact(stage, calm)
         final = calm == current
         done = stage.run(calm, tol_rel if final else STAGE_TOLERANCE, STEP_TOLERANCE_M if final else STAGE_STEP_M,
                          max_iter)
         if done and not final:
-            calm_intrusion = anchor_intrusion(sim)
             _apply_current(stage, current, tol_rel, max_iter)
     finally:
         sim.env_f[L.EF_CUR_SCALE] = current
@@ -266,11 +311,40 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max
     iterations = int(ctl[C_ITERATIONS])
     if ctl[C_STATUS] != STATUS_CONVERGED:
         reason = "a non-finite residual" if ctl[C_STATUS] == STATUS_NONFINITE else f"{iterations} iterations"
-        exc = StaticsNotConverged(f"static equilibrium not reached after {reason} (largest residual/weight "
+        on_anchor = on_anchor or _line_inside_anchor(sim)
+        where = (" with a line resting on the anchor (a larger installation.vessel_spacing_m keeps the loop clear of "
+                 "it)" if on_anchor else "")
+        exc = StaticsNotConverged(f"static equilibrium not reached after {reason}{where} (largest residual/weight "
                                   f"{ctl[C_RESIDUAL]:.3g}, tolerance {tol_rel:g})", float(ctl[C_RESIDUAL]))
-        exc.calm_intrusion = calm_intrusion  # the calm equilibrium's line node deepest inside the anchor
+        exc.line_on_anchor = on_anchor
         raise exc
     return StaticsReport(iterations, float(ctl[C_RESIDUAL]), 0.0, n_dofs, "newton")
+
+
+def _line_inside_anchor(sim) -> bool:
+    """Whether the scene models the line-anchor contact and a line node lies inside the anchor now."""
+    return bool(sim.model.body_active and sim.model.contact_f[L.CF_ON] != 0.0
+                and deepest_inside_anchor(sim.state.node_pos, sim.state.node_i, sim.state.body_state,
+                                          sim.model.contact_shape, -float(sim.env_f[L.EF_DEPTH]))[0] > 0.0)
+
+
+def _stiffen_contact(stage: _Stage, current: float) -> None:
+    """Solve the calm problem (to the stage tolerance) at each share of the line-anchor contact's stiffness in
+    ``CONTACT_RAMP``; the stiffness is its own again afterwards.
+
+    Why: from a guess that hangs a line through the anchor, the full stiffness's first step throws the line out
+    to the nearest face at once, and the loop, held by its slack bottom alone, does not find its way back (most
+    such scenes ended unsolved after 2000 iterations); soft first, the line is pushed out as the loop follows."""
+    contact_f = stage.sim.model.contact_f
+    stiffness = float(contact_f[L.CF_STIFFNESS])
+    try:
+        for share in CONTACT_RAMP:
+            contact_f[L.CF_STIFFNESS] = stiffness * share
+            stage.ctl[C_TAU] = TAU_START_S
+            stage.run(current, STAGE_TOLERANCE, STAGE_STEP_M, STAGE_ITERATIONS)
+    finally:
+        contact_f[L.CF_STIFFNESS] = stiffness
+    stage.ctl[C_TAU] = TAU_START_S
 
 
 def _apply_current(stage: _Stage, current: float, tol_rel: float, max_iter: int) -> bool:

@@ -308,17 +308,23 @@ def deepest_inside_anchor(node_pos, node_i, body_state, shape, seabed_z):
 
 
 def check_anchor_clearance(sim) -> None:
-    """Refuse an equilibrium that puts a line through the anchor's body where the scene models the line-anchor
-    contact (``contact_model``): the static problem leaves the contact out, and a fall from such a state would
-    start with the contact throwing the line out of the body (forces of many MN in its first step).
+    """Refuse an equilibrium in which a line presses more than ``ANCHOR_CLEARANCE_M`` into the anchor where the
+    scene models their contact: the penalty contact holds a resting line within millimetres, so a deeper node
+    means a load its stiffness cannot carry (a fall from there would start by throwing the line out).
 
     Raises
     ------
     NoEquilibrium
-        A free node lies more than ``ANCHOR_CLEARANCE_M`` inside the anchor.
+        Naming ``discretization.contact_stiffness_scale``.
     """
-    if sim.model.contact_f[L.CF_ON] != 0.0:
-        refuse_anchor_intrusion(sim, *anchor_intrusion(sim))
+    if sim.model.contact_f[L.CF_ON] == 0.0:
+        return
+    depth_m, line = anchor_intrusion(sim)
+    if depth_m > ANCHOR_CLEARANCE_M:
+        disc = sim.model.scene.discretization
+        raise NoEquilibrium("discretization.contact_stiffness_scale", disc.contact_stiffness_scale,
+                            "a stiffer line-anchor contact",
+                            f"the {(line or 'line').replace('_', ' ')} would press {depth_m:.2g} m into the anchor")
 
 
 def anchor_intrusion(sim) -> tuple[float, str]:
@@ -332,20 +338,6 @@ def anchor_intrusion(sim) -> tuple[float, str]:
     names = {line.index: name for name, line in m.lines.items()}
     segs = np.nonzero((st.seg_i[:, L.SI_A] == node) | (st.seg_i[:, L.SI_B] == node))[0]
     return depth, names.get(int(st.seg_i[segs[0], L.SI_LINE]), "") if node >= 0 and segs.size else ""
-
-
-def refuse_anchor_intrusion(sim, depth_m: float, line: str, calm_unsolved: bool = False) -> None:
-    """Raise :class:`NoEquilibrium` naming the vessel spacing where a line node lies more than
-    ``ANCHOR_CLEARANCE_M`` inside the anchor (``depth_m``, from :func:`anchor_intrusion`). ``calm_unsolved``: the
-    depth is the calm equilibrium's, from which the static solve found none in the scene's current."""
-    if depth_m <= ANCHOR_CLEARANCE_M:
-        return
-    where = (f"in calm water ({depth_m:.2g} m inside its surface), which the static problem leaves out, and no "
-             "equilibrium in the current follows from there" if calm_unsolved
-             else f"({depth_m:.2g} m inside its surface), which the static problem leaves out")
-    raise NoEquilibrium("installation.vessel_spacing_m", sim.model.scene.installation.vessel_spacing_m,
-                        "a larger vessel_spacing_m (or discretization.line_anchor_contact: off)",
-                        f"the {(line or 'line').replace('_', ' ')} would hang through the anchor {where}")
 
 
 def suspending_offset_m(sim, margin_m: float = 5.0, steps: int = 40) -> float:

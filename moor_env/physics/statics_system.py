@@ -12,8 +12,7 @@ J^T S J plus the geometric stiffness of its arms (a force f at axial coordinate 
 and the current drag's change with each segment's direction (``hydro.slender_drag_dq``); the drag's change with
 depth and the anchor's own drag are left out. The system is solved in O(N) by block elimination over the tree of
 lines (``physics/tree.py``), leaves first, the anchor's five unknowns (position, two tilt angles) at the root.
-The lines' contact with the anchor's body is not part of the static problem
-(``contact_model.without_line_anchor_contact``).
+The lines' contact with the anchor's body adds its own terms and couplings (``physics/statics_contact.py``).
 
 The seabed contact is one-sided: K carries its stiffness for the nodes that are on the seabed at the end of the
 step, and G the gap a node must close before the seabed holds it (or the support it loses when it lifts off). The
@@ -40,6 +39,14 @@ from moor_env.physics.linalg3 import inverse3
 from moor_env.physics.line import half_segment_morison, segment_axis, smoothed_tension_slope_n
 from moor_env.physics.loads import compute_loads, set_constrained_nodes
 from moor_env.physics.seabed import seabed_stiffness_n_m
+from moor_env.physics.statics_contact import (
+    N_GEO,
+    add_contact_blocks,
+    contact_geometry,
+    pass_on_eliminated,
+    pass_on_parent,
+    predict_contact,
+)
 from moor_env.physics.tree import OR_EFF, OR_ORDER, TR_DEG, TR_NB, TR_SEG
 
 SLACK_STIFFNESS = 1e-6  # least stiffness of a segment in K, as a fraction of EA / l0 (keeps K regular)
@@ -215,11 +222,13 @@ def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling
 
 
 @jit_step
-def _solve_body(inv_tau2, p, basis, res_body, model, state, smat, rho_p, dq):
+def _solve_body(inv_tau2, p, basis, res_body, model, state, smat, rho_p, dq, contact, bmat, cmat, body_a, body_r):
     """The anchor's five unknowns from the lines' impedance ``smat`` and right-hand side ``rho_p`` at node p.
 
     (J^T S J + K_geo + D_b / tau^2) dq = R_b + J^T rho, with J the body node's motion per unknown (translation,
-    then rotation about basis[0] and basis[1]). Writes dq and returns the body node's motion J dq in ``rho_p``.
+    then rotation about basis[0] and basis[1]); with ``contact``, plus the couplings the eliminated lines passed
+    on (J^T B_p + C_p J + A) dq and their right-hand side (``physics/statics_contact.py``). Writes dq and returns
+    the body node's motion J dq in ``rho_p``.
     """
     body_state = state.body_state
     node_force = state.node_force
@@ -241,16 +250,21 @@ def _solve_body(inv_tau2, p, basis, res_body, model, state, smat, rho_p, dq):
         a[c, c] += body_f[L.BF_MASS_AXIAL] * inv_tau2
     for c in range(3, 5):
         a[c, c] += body_f[L.BF_M22] * inv_tau2 + geo
+    if contact:
+        a += jac.T @ bmat[p] + cmat[p] @ jac + body_a
+        rhs += body_r
     sol = np.linalg.solve(a, rhs)
     dq[:] = sol
     rho_p[:] = jac @ sol
 
 
 @jit_step
-def eliminate(inv_tau2, nq, body_node, basis, res_body, dq, model, state, dmat, coupling, tree, orow):
+def eliminate(inv_tau2, nq, body_node, basis, res_body, dq, model, state, dmat, coupling, tree, orow, contact,
+              bmat, cmat, coupled, body_a, body_r):
     """Solve the assembled system in place: ``state.node_acc`` holds the right-hand side in and the step out (the
     anchor's in ``dq``), by block elimination over the tree, leaves first (x_c = D_c^-1 (r_c - K_cp x_p) once the
-    parent p is known). The 3x3 products are written out: numpy's would allocate for every node."""
+    parent p is known). With ``contact``, nodes coupled to the anchor outside the tree carry their coupling along
+    (``physics/statics_contact.py``). The 3x3 products are written out: numpy's would allocate for every node."""
     seg_i = state.seg_i
     node_acc = state.node_acc
     inv = np.empty((3, 3))
@@ -265,12 +279,17 @@ def eliminate(inv_tau2, nq, body_node, basis, res_body, dq, model, state, dmat, 
             node_acc[c, i] = r[i]
             for j in range(3):
                 dmat[c, i, j] = inv[i, j]
+        linked = contact and coupled[c] != 0
+        if linked:
+            pass_on_eliminated(c, inv, state, bmat, cmat, body_a, body_r)
         if tree[c, TR_DEG] != -1:
             continue
         s = tree[c, TR_SEG]
         p = tree[c, TR_NB]
         cp = 0 if orow[seg_i[s, L.SI_A], OR_EFF] == c else 1  # coupling[s, cp] = K_cp, coupling[s, 1 - cp] = K_pc
         pc = 1 - cp
+        if linked:
+            pass_on_parent(c, p, coupling[s, pc], coupling[s, cp], bmat, cmat, coupled)
         for i in range(3):
             for j in range(3):
                 kpc_inv[i, j] = (coupling[s, pc, i, 0] * inv[0, j] + coupling[s, pc, i, 1] * inv[1, j]
@@ -283,10 +302,15 @@ def eliminate(inv_tau2, nq, body_node, basis, res_body, dq, model, state, dmat, 
                                + coupling[s, pc, i, 2] * node_acc[c, 2])
     if body_node >= 0:
         rho_p = node_acc[body_node].copy()
-        _solve_body(inv_tau2, body_node, basis, res_body, model, state, dmat[body_node], rho_p, dq)
+        _solve_body(inv_tau2, body_node, basis, res_body, model, state, dmat[body_node], rho_p, dq, contact, bmat,
+                    cmat, body_a, body_r)
         node_acc[body_node, :] = rho_p
     for k in range(nq - 1, -1, -1):
         c = orow[k, OR_ORDER]
+        if contact and coupled[c] != 0:  # x_c -= D_c^-1 B_c dq
+            for i in range(3):
+                node_acc[c, i] -= bmat[c, i, 0] * dq[0] + bmat[c, i, 1] * dq[1] + bmat[c, i, 2] * dq[2] + \
+                    bmat[c, i, 3] * dq[3] + bmat[c, i, 4] * dq[4]
         if tree[c, TR_DEG] != -1:
             continue
         s = tree[c, TR_SEG]
@@ -323,7 +347,7 @@ def solve_step(inv_tau2, nq, body_node, basis, res_body, dq, model, state, scrat
     """The step at the present state (its loads evaluated) into ``state.node_acc`` (free nodes) and ``dq`` (the
     anchor), solved again while the contacts it predicts change; returns the number of solves. ``scratch``: the
     arrays of :func:`new_scratch`."""
-    dmat, coupling, taut, node_down = scratch
+    dmat, coupling, taut, node_down, geo, cand, cin, bmat, cmat, coupled, body_a, body_r = scratch
     node_pos = state.node_pos
     seg_i = state.seg_i
     seg_f = state.seg_f
@@ -333,13 +357,22 @@ def solve_step(inv_tau2, nq, body_node, basis, res_body, dq, model, state, scrat
         taut[s] = 1 if length > seg_f[s, L.SF_L0] or seg_age[s] < SLACK_PATIENCE else 0
     for n in range(node_pos.shape[0]):
         node_down[n] = 1 if node_pos[n, 2] <= seabed else 0
+    contact = (body_node >= 0 and model.contact_f[L.CF_ON] != 0.0
+               and contact_geometry(basis, model, state, geo, cand, cin) > 0)
     solves = 0
     while True:
         _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling, orow)
-        eliminate(inv_tau2, nq, body_node, basis, res_body, dq, model, state, dmat, coupling, tree, orow)
+        if contact:
+            add_contact_blocks(model, state, geo, cand, cin, dmat, bmat, cmat, coupled, body_a, body_r)
+        eliminate(inv_tau2, nq, body_node, basis, res_body, dq, model, state, dmat, coupling, tree, orow, contact,
+                  bmat, cmat, coupled, body_a, body_r)
         solves += 1
-        if solves >= ACTIVE_SET_ROUNDS or _predict_seabed(body_node, state, seabed, node_down, orow,
-                                                          solves == 1) == 0:
+        if solves >= ACTIVE_SET_ROUNDS:
+            return solves
+        changed = _predict_seabed(body_node, state, seabed, node_down, orow, solves == 1)
+        if contact:
+            changed += predict_contact(state, dq, geo, cand, cin, solves == 1)
+        if changed == 0:
             return solves
 
 
@@ -379,6 +412,10 @@ def count_slack(state, seg_age):
 @jit_step
 def new_scratch(n_nodes, n_segs):
     """Scratch arrays of :func:`solve_step`: diagonal blocks, segment couplings, segments K holds taut, nodes on the
-    seabed after the step."""
+    seabed after the step; the line-anchor contact's (``physics/statics_contact.py``): candidates' geometry,
+    candidates, nodes inside after the step, node-anchor and anchor-node couplings, coupled nodes, the anchor's
+    block and right-hand side."""
     return (np.zeros((n_nodes, 3, 3)), np.zeros((n_segs, 2, 3, 3)), np.zeros(n_segs, np.int64),
-            np.zeros(n_nodes, np.int64))
+            np.zeros(n_nodes, np.int64), np.zeros((n_nodes, N_GEO)), np.zeros(n_nodes, np.int64),
+            np.zeros(n_nodes, np.int64), np.zeros((n_nodes, 3, 5)), np.zeros((n_nodes, 5, 3)),
+            np.zeros(n_nodes, np.int64), np.zeros((5, 5)), np.zeros(5))

@@ -62,9 +62,9 @@ def test_follower_of_the_bundled_plan_policy_reaches_its_targets(env):
     assert record["failure"] is None and record["touchdown"]
 
 
-def test_episode_record_counts_refused_moves(env):
-    """Closing the spacing to 10 m over a 10 m vertical chain has no equilibrium (refused); the release then fires
-    on the second of two commands: 3 steps, 1 move refused, not forced."""
+def test_episode_record_counts_refused_moves(env, refuse_spacing_below_20_m):
+    """Closing the spacing to 10 m has no equilibrium (made so by the fixture: refused); the release then fires on
+    the second of two commands: 3 steps, 1 move refused, not forced."""
     policy = _Script([[-1.0, 0.0, 0.0, 0.0, -1.0], [0.0, 0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 0.0, 1.0]])
     scenario = {"id": "refused", "seed": 0, "options": {**CALM_500, "levers": START}}
     record = run_episode(env, policy, scenario, RELEASE_V1_ENV, env.unwrapped.cfg)

@@ -109,9 +109,9 @@ def test_spaces_and_determinism(env):
     assert runs[0] == runs[1]
 
 
-def test_move_without_equilibrium_is_refused(env):
-    """Closing the spacing to 10 m over a 10 m vertical chain would hang the loop through the anchor: the levers
-    stay where they were and the observation flags the refusal."""
+def test_move_without_equilibrium_is_refused(env, refuse_spacing_below_20_m):
+    """Mechanism: a move to a geometry without an equilibrium (here any spacing below 20 m, ``tests/conftest.py``)
+    is not carried out: the levers stay where they were and the observation flags the refusal."""
     obs, info = env.reset(seed=0, options={**CALM_500, "levers": START})
     assert info["start_draws"] == 0 and info["levers"] == START
     obs, _, terminated, _, info = env.step(np.array([-1.0, 0.0, 0.0, 0.0, -1.0], np.float32))

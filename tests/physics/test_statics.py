@@ -155,17 +155,15 @@ def test_relaxation_rounds_continue_only_while_the_residual_shrinks(monkeypatch,
 
 # --- the Newton solver (moor_env.physics.statics) ----------------------------------------------------------------
 def _residual_ratio(static) -> float:
-    """Largest free-node residual over the node's weight at the solution, on the smoothed law the solver ends on."""
-    from moor_env import Simulator
-    from moor_env.contact_model import without_line_anchor_contact
+    """Largest free-node residual over the node's weight at the solution, on the smoothed law the solver ends on
+    (the line-anchor contact included where the scene models it)."""
     from moor_env.physics.statics import SMOOTHING_FINAL
 
     sim = static.simulator
     assert sim.env_f[L.EF_SLACK_SMOOTHING] == 0.0 and sim.env_f[L.EF_SEABED_SMOOTHING] == 0.0
     sim.env_f[L.EF_SLACK_SMOOTHING] = SMOOTHING_FINAL  # the exact seabed contact, the tension law of the final level
     try:
-        # the problem the solver solves: without the line-anchor contact (moor_env.contact_model)
-        without_line_anchor_contact(Simulator.evaluate_loads)(sim)
+        sim.evaluate_loads()
     finally:
         sim.env_f[L.EF_SLACK_SMOOTHING] = 0.0
     free = sim.state.node_i[:, L.NI_KIND] == L.NODE_FREE
@@ -173,8 +171,8 @@ def _residual_ratio(static) -> float:
     return float(np.max(np.abs(sim.work.node_force[free]) / weight[:, None]))
 
 
-# the line-anchor contact off: the static problem is the same (it leaves the contact out), and a loop that hangs
-# through the anchor is not refused (test_line_through_the_anchor_is_refused)
+# the line-anchor contact off: these properties are the lines' own (seabed, slack, current); the loop resting on
+# the anchor is tested in test_statics_contact.py
 NO_CONTACT = "discretization.line_anchor_contact"
 
 
@@ -231,11 +229,10 @@ def test_long_slack_lines_on_the_seabed(overrides):
     method alone reaches the equilibrium, residual below 1e-4 of every node's weight, or the scene is refused with
     its cause (the fibre rope on the seabed)."""
     try:
-        static = solve_statics(load_scene("gjoa-500", overrides), progress=False, method="newton")
+        static = solve_statics(load_scene("gjoa-500", {**overrides, NO_CONTACT: "off"}), progress=False,
+                               method="newton")
     except NoEquilibrium as exc:
-        assert ((exc.key, "fibre") if "fibre" in exc.cause else (exc.key, "through the anchor")) in (
-            ("installation.mooring_line_length_m", "fibre"), ("installation.vessel_spacing_m", "through the anchor"))
-        assert exc.cause.startswith("the fibre rope") or "through the anchor" in exc.cause
+        assert exc.key == "installation.mooring_line_length_m" and exc.cause.startswith("the fibre rope")
         return
     assert _residual_ratio(static) < 1e-4
     assert static.tip_height_above_seabed_m == pytest.approx(overrides["drop_height_m"], abs=1e-3)
@@ -300,64 +297,3 @@ def test_hard_scenes_converge(overrides):
     scene = {"fidelity": "fast", NO_CONTACT: "off", **overrides}
     static = solve_statics(load_scene("gjoa-500", scene), progress=False, method="newton")
     assert _residual_ratio(static) < 1e-4
-
-
-def test_line_through_the_anchor_is_refused():
-    """Where the scene models the line-anchor contact, an equilibrium with the loop hanging through the anchor (the
-    vessels 0 m apart in calm water: the loop hangs straight down beside the vertical chain) is refused, naming the
-    vessel spacing; with the contact off the same scene is solved and a line node lies inside the anchor by more
-    than the 5 cm tolerance."""
-    from moor_env.physics.statics_guess import ANCHOR_CLEARANCE_M, deepest_inside_anchor
-
-    scene = {"vessel_spacing_m": 0.0, "fidelity": "fast"}
-    with pytest.raises(NoEquilibrium, match="through the anchor") as info:
-        solve_statics(load_scene("gjoa-500", {**scene, NO_CONTACT: "on"}), progress=False)
-    assert info.value.key == "installation.vessel_spacing_m"
-    sim = solve_statics(load_scene("gjoa-500", {**scene, NO_CONTACT: "off"}), progress=False).simulator
-    depth, node = deepest_inside_anchor(sim.state.node_pos, sim.state.node_i, sim.state.body_state,
-                                        sim.model.contact_shape, -sim.env_f[L.EF_DEPTH])
-    assert depth > ANCHOR_CLEARANCE_M and node >= 0
-
-
-def test_unsolved_current_from_a_calm_state_through_the_anchor_is_refused(monkeypatch):
-    """Mechanism: where the current stage does not converge (replaced here by one that gives up) from a calm
-    equilibrium with the loop through the anchor, a scene that models the line-anchor contact is refused naming
-    the vessel spacing, without the relaxation fallback; with the contact off the same failure stays a
-    StaticsNotConverged."""
-    import moor_env.physics.statics as statics
-    from moor_env.errors import StaticsNotConverged
-    from moor_env.physics import statics_relaxation
-
-    def give_up(stage, *args):
-        stage.ctl[statics.C_STATUS] = statics.STATUS_RUNNING
-        return False
-
-    monkeypatch.setattr(statics, "_apply_current", give_up)
-    monkeypatch.setattr(statics_relaxation, "solve_equilibrium", lambda *a, **k: pytest.fail("the fallback ran"))
-    scene = {"vessel_spacing_m": 0.0, "current_scale": 1.0, "fidelity": "fast"}
-    with pytest.raises(NoEquilibrium, match="in calm water") as info:
-        solve_statics(load_scene("gjoa-500", {**scene, NO_CONTACT: "on"}), progress=False)
-    assert info.value.key == "installation.vessel_spacing_m"
-    with pytest.raises(StaticsNotConverged):
-        solve_statics(load_scene("gjoa-500", {**scene, NO_CONTACT: "off"}), progress=False, method="newton")
-
-
-def test_anchor_clearance_depth_is_the_surface_distance():
-    """Reference: the anchor's surface (gjoa-500: one cylinder of radius 0.6 m, 13 m long); a node on the axis at
-    the cylinder's middle lies inside by the radius, one a metre beside it lies outside (depth 0). Tolerance
-    1e-9 m."""
-    from moor_env.physics.statics_guess import deepest_inside_anchor
-
-    sim = solve_statics(load_scene("gjoa-500", {"fidelity": "fast"}), progress=False).simulator
-    shape = sim.model.contact_shape
-    body = sim.state.body_state
-    axis = body[L.BS_AXIS:L.BS_AXIS + 3]
-    radius = float(shape[0, L.CS_RADIUS])
-    centre = body[L.BS_POS:L.BS_POS + 3] + 0.5 * (shape[0, L.CS_FRONT] + shape[0, L.CS_BACK]) * axis
-    side = np.cross(axis, [0.0, 1.0, 0.0])
-    beside = centre + (radius + 1.0) * side / np.linalg.norm(side)
-    kinds = np.zeros((1, sim.state.node_i.shape[1]), dtype=np.int64)
-    kinds[0, L.NI_KIND] = L.NODE_FREE
-    depth, node = deepest_inside_anchor(centre[None, :], kinds, body, shape, -1e9)
-    assert depth == pytest.approx(radius, abs=1e-9) and node == 0
-    assert deepest_inside_anchor(beside[None, :], kinds, body, shape, -1e9) == (0.0, -1)

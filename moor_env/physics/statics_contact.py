@@ -1,0 +1,218 @@
+"""The line-anchor contact in the static solver's linear system (``physics/statics_system.py``).
+
+At rest the contact law of ``physics/contact.py`` is its spring alone, F = k d n on a node d inside the anchor's
+surface (the damping and the friction act on velocities, all zero in a static state), and the anchor takes -F at
+the node. The step's system gets its linearisation in the depth, d' = d - n . (dx - J dq), J the motion of the
+anchor's material point at the node per unknown (translation, then rotation about the two tilt axes):
+
+    node block        k n n^T
+    node-anchor       -k n (J^T n)^T      (and its transpose, anchor-node)
+    anchor block      k (J^T n) (J^T n)^T
+
+Left out: the turning of the normal (f_n H) and the moment arm's change, both smaller than k n n^T by the depth
+over the anchor's radius (millimetres over metres at rest); Newton's method keeps the exact residual, so they only
+slow its last iterations, never move its answer.
+
+A node couples to the anchor outside its attachment, which closes a loop in the tree of lines. The block
+elimination carries it exactly: every eliminated node passes its coupling to the anchor on to its parent (a 3x5
+block each way, nodes on the path from a contact to the anchor only) and its share to the anchor's 5x5 block,
+which is solved last at the root.
+
+As the seabed, the contact is an active set predicted to the end of the step: a node predicted inside gets the
+spring and the gap it must close before it touches (its force is the linear law's, k d n with d < 0, and zero
+where it already is inside), a node inside now and predicted outside lets go.
+"""
+
+from __future__ import annotations
+
+from moor_env.physics import layout as L
+from moor_env.physics._jit import jit_step
+from moor_env.physics.anchor_surface import from_cog, surface_distance, within_reach
+
+REACH_M = 2.0  # nodes this close to the anchor's bounding cylinder may enter the contact in one step
+G_DEPTH = 0  # contact geometry of a candidate node: depth (negative: gap) [m], normal, J^T n (5)
+G_NORMAL = 1
+G_JN = 4
+N_GEO = 9
+
+
+@jit_step
+def _jn(basis, rx, ry, rz, nx, ny, nz, geo, n):
+    """J^T n of a material point at r from the COG: the normal's translation part, then basis[k] . (r x n)."""
+    geo[n, G_JN] = nx
+    geo[n, G_JN + 1] = ny
+    geo[n, G_JN + 2] = nz
+    cx = ry * nz - rz * ny
+    cy = rz * nx - rx * nz
+    cz = rx * ny - ry * nx
+    for k in range(2):
+        geo[n, G_JN + 3 + k] = basis[k, 0] * cx + basis[k, 1] * cy + basis[k, 2] * cz
+
+
+@jit_step
+def contact_geometry(basis, model, state, geo, cand, cin):
+    """Depth, normal and J^T n of every free node near the anchor (``cand`` 1) at the present state; ``cin`` 1
+    where it is inside now. Nodes below the seabed are left to it, as in ``contact.add_contact_loads``. Returns the
+    number of candidates."""
+    node_pos = state.node_pos
+    node_i = state.node_i
+    body_state = state.body_state
+    shape = model.contact_shape
+    seabed = -model.env_f[L.EF_DEPTH]
+    count = 0
+    for n in range(node_pos.shape[0]):
+        cand[n] = 0
+        cin[n] = 0
+        px = node_pos[n, 0]
+        py = node_pos[n, 1]
+        pz = node_pos[n, 2]
+        if node_i[n, L.NI_KIND] != L.NODE_FREE or pz < seabed or not within_reach(px, py, pz, body_state, shape,
+                                                                                   REACH_M):
+            continue
+        sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(px, py, pz, body_state, shape)
+        rx, ry, rz, _ = from_cog(px, py, pz, body_state)
+        geo[n, G_DEPTH] = -sd
+        geo[n, G_NORMAL] = nx
+        geo[n, G_NORMAL + 1] = ny
+        geo[n, G_NORMAL + 2] = nz
+        _jn(basis, rx, ry, rz, nx, ny, nz, geo, n)
+        cand[n] = 1
+        cin[n] = 1 if sd < 0.0 else 0
+        count += 1
+    return count
+
+
+@jit_step
+def add_contact_blocks(model, state, geo, cand, cin, dmat, bmat, cmat, coupled, body_a, body_r):
+    """The contact's terms of the step (module docstring): node blocks into ``dmat``, the couplings into
+    ``bmat`` (node-anchor, 3x5) and ``cmat`` (anchor-node, 5x3), the anchor's block into ``body_a`` and the
+    right-hand sides' changes into ``state.node_acc`` and ``body_r``. Clears the couplings of the last step."""
+    rhs = state.node_acc
+    k = model.contact_f[L.CF_STIFFNESS]
+    for n in range(geo.shape[0]):
+        if coupled[n] != 0:
+            bmat[n, :, :] = 0.0
+            cmat[n, :, :] = 0.0
+            coupled[n] = 0
+    body_a[:, :] = 0.0
+    body_r[:] = 0.0
+    for n in range(geo.shape[0]):
+        if cand[n] == 0:
+            continue
+        depth = geo[n, G_DEPTH]
+        inside_now = depth > 0.0
+        if cin[n] == 0:
+            if inside_now:  # lets go during the step: its present force goes
+                for i in range(3):
+                    rhs[n, i] -= k * depth * geo[n, G_NORMAL + i]
+                for i in range(5):
+                    body_r[i] += k * depth * geo[n, G_JN + i]
+            continue
+        if not inside_now:  # the gap to close before the anchor holds the node
+            for i in range(3):
+                rhs[n, i] += k * depth * geo[n, G_NORMAL + i]
+            for i in range(5):
+                body_r[i] -= k * depth * geo[n, G_JN + i]
+        for i in range(3):
+            for j in range(3):
+                dmat[n, i, j] += k * geo[n, G_NORMAL + i] * geo[n, G_NORMAL + j]
+            for j in range(5):
+                bmat[n, i, j] -= k * geo[n, G_NORMAL + i] * geo[n, G_JN + j]
+                cmat[n, j, i] -= k * geo[n, G_JN + j] * geo[n, G_NORMAL + i]
+        for i in range(5):
+            for j in range(5):
+                body_a[i, j] += k * geo[n, G_JN + i] * geo[n, G_JN + j]
+        coupled[n] = 1
+
+
+@jit_step
+def pass_on_eliminated(c, inv, state, bmat, cmat, body_a, body_r):
+    """Node c just eliminated (``inv`` = D_c^-1, ``state.node_acc[c]`` = D_c^-1 r_c): the anchor's rows take
+    -C_c D_c^-1 (B_c, r_c); ``bmat[c]`` becomes D_c^-1 B_c (for the back substitution) and ``cmat[c]`` C_c D_c^-1
+    (for the parent, :func:`pass_on_parent`)."""
+    x = state.node_acc
+    for i in range(5):
+        body_r[i] -= cmat[c, i, 0] * x[c, 0] + cmat[c, i, 1] * x[c, 1] + cmat[c, i, 2] * x[c, 2]
+    for j in range(5):
+        b0 = inv[0, 0] * bmat[c, 0, j] + inv[0, 1] * bmat[c, 1, j] + inv[0, 2] * bmat[c, 2, j]
+        b1 = inv[1, 0] * bmat[c, 0, j] + inv[1, 1] * bmat[c, 1, j] + inv[1, 2] * bmat[c, 2, j]
+        b2 = inv[2, 0] * bmat[c, 0, j] + inv[2, 1] * bmat[c, 1, j] + inv[2, 2] * bmat[c, 2, j]
+        bmat[c, 0, j] = b0
+        bmat[c, 1, j] = b1
+        bmat[c, 2, j] = b2
+    for i in range(5):
+        for j in range(5):
+            body_a[i, j] -= (cmat[c, i, 0] * bmat[c, 0, j] + cmat[c, i, 1] * bmat[c, 1, j]
+                             + cmat[c, i, 2] * bmat[c, 2, j])
+    for i in range(5):
+        c0 = cmat[c, i, 0] * inv[0, 0] + cmat[c, i, 1] * inv[1, 0] + cmat[c, i, 2] * inv[2, 0]
+        c1 = cmat[c, i, 0] * inv[0, 1] + cmat[c, i, 1] * inv[1, 1] + cmat[c, i, 2] * inv[2, 1]
+        c2 = cmat[c, i, 0] * inv[0, 2] + cmat[c, i, 1] * inv[1, 2] + cmat[c, i, 2] * inv[2, 2]
+        cmat[c, i, 0] = c0
+        cmat[c, i, 1] = c1
+        cmat[c, i, 2] = c2
+
+
+@jit_step
+def pass_on_parent(c, p, k_pc, k_cp, bmat, cmat, coupled):
+    """The parent p of an eliminated, coupled node c takes its coupling: B_p -= K_pc D_c^-1 B_c, C_p -= C_c D_c^-1
+    K_cp (``bmat[c]``, ``cmat[c]`` as :func:`pass_on_eliminated` left them)."""
+    for i in range(3):
+        for j in range(5):
+            bmat[p, i, j] -= k_pc[i, 0] * bmat[c, 0, j] + k_pc[i, 1] * bmat[c, 1, j] + k_pc[i, 2] * bmat[c, 2, j]
+    for i in range(5):
+        for j in range(3):
+            cmat[p, i, j] -= cmat[c, i, 0] * k_cp[0, j] + cmat[c, i, 1] * k_cp[1, j] + cmat[c, i, 2] * k_cp[2, j]
+    coupled[p] = 1
+
+
+@jit_step
+def predict_contact(state, dq, geo, cand, cin, release):
+    """Update the nodes predicted inside the anchor after the step (nodes in ``state.node_acc``, the anchor in
+    ``dq``); returns how many changed. With ``release`` False a node in contact stays in (no cycling)."""
+    node_acc = state.node_acc
+    changed = 0
+    for n in range(geo.shape[0]):
+        if cand[n] == 0:
+            continue
+        move = 0.0  # the node's motion relative to the anchor's point, along the normal
+        for i in range(3):
+            move += geo[n, G_NORMAL + i] * node_acc[n, i]
+        for i in range(5):
+            move -= geo[n, G_JN + i] * dq[i]
+        inside = 1 if geo[n, G_DEPTH] - move > 0.0 else 0
+        if inside != cin[n] and (release or inside == 1):
+            cin[n] = inside
+            changed += 1
+    return changed
+
+
+@jit_step
+def place_outside(model, state, clearance_m):
+    """Move every free node above the seabed that lies inside the anchor to ``clearance_m`` [m] outside its
+    surface, along the normal; returns how many moved.
+
+    Why: the first guess hangs the lines as if the anchor were not there, and from a guess metres inside it the
+    penalty's linear model points each node to its nearest face, whatever the line around it does; placed just
+    outside, the lines meet the anchor from the side they hang on."""
+    node_pos = state.node_pos
+    node_i = state.node_i
+    body_state = state.body_state
+    shape = model.contact_shape
+    seabed = -model.env_f[L.EF_DEPTH]
+    moved = 0
+    for n in range(node_pos.shape[0]):
+        px = node_pos[n, 0]
+        py = node_pos[n, 1]
+        pz = node_pos[n, 2]
+        if node_i[n, L.NI_KIND] != L.NODE_FREE or pz < seabed or not within_reach(px, py, pz, body_state, shape):
+            continue
+        sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(px, py, pz, body_state, shape)
+        if sd >= 0.0:
+            continue
+        push = clearance_m - sd
+        node_pos[n, 0] = px + push * nx
+        node_pos[n, 1] = py + push * ny
+        node_pos[n, 2] = pz + push * nz
+        moved += 1
+    return moved
