@@ -11,7 +11,9 @@ anchor's material point at the node per unknown (translation, then rotation abou
 
 Left out: the turning of the normal (f_n H) and the moment arm's change, both smaller than k n n^T by the depth
 over the anchor's radius (millimetres over metres at rest); Newton's method keeps the exact residual, so they only
-slow its last iterations, never move its answer.
+slow its last iterations, never move its answer. Why not f_n H: far from the solution, with a node centimetres
+inside the convex shaft, it makes the node's block indefinite; measured on the low-spacing scenes of the statics
+benchmark it left more of them unsolved than it solved.
 
 A node couples to the anchor outside its attachment, which closes a loop in the tree of lines. The block
 elimination carries it exactly: every eliminated node passes its coupling to the anchor on to its parent (a 3x5
@@ -19,8 +21,8 @@ block each way, nodes on the path from a contact to the anchor only) and its sha
 which is solved last at the root.
 
 As the seabed, the contact is an active set predicted to the end of the step: a node predicted inside gets the
-spring and the gap it must close before it touches (its force is the linear law's, k d n with d < 0, and zero
-where it already is inside), a node inside now and predicted outside lets go.
+spring and, where it is still outside, the gap it must close before it touches (the linear law k d n from its
+present depth d < 0); a node inside now and predicted outside lets go.
 """
 
 from __future__ import annotations
@@ -185,34 +187,3 @@ def predict_contact(state, dq, geo, cand, cin, release):
             cin[n] = inside
             changed += 1
     return changed
-
-
-@jit_step
-def place_outside(model, state, clearance_m):
-    """Move every free node above the seabed that lies inside the anchor to ``clearance_m`` [m] outside its
-    surface, along the normal; returns how many moved.
-
-    Why: the first guess hangs the lines as if the anchor were not there, and from a guess metres inside it the
-    penalty's linear model points each node to its nearest face, whatever the line around it does; placed just
-    outside, the lines meet the anchor from the side they hang on."""
-    node_pos = state.node_pos
-    node_i = state.node_i
-    body_state = state.body_state
-    shape = model.contact_shape
-    seabed = -model.env_f[L.EF_DEPTH]
-    moved = 0
-    for n in range(node_pos.shape[0]):
-        px = node_pos[n, 0]
-        py = node_pos[n, 1]
-        pz = node_pos[n, 2]
-        if node_i[n, L.NI_KIND] != L.NODE_FREE or pz < seabed or not within_reach(px, py, pz, body_state, shape):
-            continue
-        sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(px, py, pz, body_state, shape)
-        if sd >= 0.0:
-            continue
-        push = clearance_m - sd
-        node_pos[n, 0] = px + push * nx
-        node_pos[n, 1] = py + push * ny
-        node_pos[n, 2] = pz + push * nz
-        moved += 1
-    return moved

@@ -84,9 +84,9 @@ def test_newton_step_predicts_the_residual_change():
     they are) changes every line node's residual as predicted, F(x + eps dx) = (1 - eps) F(x), within 2 % of the
     change (the turning of the normal and the moment arm's change, left out of the system, are below that)."""
     from moor_env.physics import statics_system as system
-    from moor_env.physics.statics import _slack_counts, body_root
     from moor_env.physics.statics_contact import add_contact_blocks, contact_geometry
     from moor_env.physics.statics_newton import _apply
+    from moor_env.physics.statics_stages import body_root, slack_counts
     from moor_env.physics.tree import build_tree, order
 
     sim = solve_statics(load_scene("gjoa-500", RESTING[0]), progress=False, method="newton").simulator
@@ -116,7 +116,7 @@ def test_newton_step_predicts_the_residual_change():
     dmat, coupling, taut, node_down, geo, cand, cin, bmat, cmat, coupled, body_a, body_r = system.new_scratch(nn, ns)
     seg = sim.state.seg_i
     length = np.linalg.norm(sim.state.node_pos[seg[:, L.SI_B]] - sim.state.node_pos[seg[:, L.SI_A]], axis=1)
-    taut[:] = (length > sim.state.seg_f[:, L.SF_L0]) | (_slack_counts(sim.state, False) < system.SLACK_PATIENCE)
+    taut[:] = (length > sim.state.seg_f[:, L.SF_L0]) | (slack_counts(sim.state, False) < system.SLACK_PATIENCE)
     node_down[:] = sim.state.node_pos[:, 2] <= -sim.env_f[L.EF_DEPTH]
     assert contact_geometry(basis, model, state, geo, cand, cin) > 0 and cin[contact_node] == 1
     system._assemble(1e-24, body, model, state, taut, node_down, dmat, coupling, orow)
@@ -146,12 +146,13 @@ def test_unsolved_with_a_line_on_the_anchor_names_the_spacing(monkeypatch):
     the relaxation fallback is not run."""
     import moor_env.physics.statics as statics
     from moor_env.physics import statics_relaxation
+    from moor_env.physics.statics_newton import C_STATUS, STATUS_RUNNING
 
     def give_up(stage, *args):
-        stage.ctl[statics.C_STATUS] = statics.STATUS_RUNNING
+        stage.ctl[C_STATUS] = STATUS_RUNNING
         return False
 
-    monkeypatch.setattr(statics, "_apply_current", give_up)
+    monkeypatch.setattr(statics, "apply_current", give_up)
     monkeypatch.setattr(statics_relaxation, "solve_equilibrium", lambda *a, **k: pytest.fail("the fallback ran"))
     with pytest.raises(StaticsNotConverged, match="installation.vessel_spacing_m"):
         solve_statics(load_scene("gjoa-500", RESTING[2]), progress=False)

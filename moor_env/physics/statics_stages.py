@@ -1,0 +1,181 @@
+"""The static solver's stages: the Newton kernel run in chunks on one current scale (:class:`Stage`), the scene's
+current applied from the calm equilibrium (:func:`apply_current`), and the line-anchor contact's stiffness raised
+in decades (:func:`stiffen_contact`); the order of the stages is ``physics/statics.py``'s.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from moor_env.errors import StaticsNotConverged
+from moor_env.physics import layout as L
+from moor_env.physics.statics_newton import (
+    C_CAP,
+    C_CUTS,
+    C_ITERATIONS,
+    C_RESIDUAL,
+    C_STATUS,
+    C_STEP_TOL,
+    C_TAU,
+    C_TOL,
+    STATUS_CONVERGED,
+    STATUS_RUNNING,
+    STEP_TOLERANCE_M,
+    TAU_START_S,
+    newton_statics,
+)
+from moor_env.physics.statics_system import SLACK_PATIENCE
+
+CHUNK_ITERATIONS = 50
+SHORT_STAGE = 100  # iterations of the first try of the scene's current in one stage
+INCREMENT_ITERATIONS = 400  # iterations of the second try, in increments
+STAGE_TOLERANCE = 1e-2  # residual/weight to which a current increment before the last is solved
+STAGE_STEP_M = 1e-2  # and its step
+STAGE_ITERATIONS = 40  # iterations of one current increment before it is retried at a quarter
+EASY_STAGE = 8  # an increment solved in this many iterations doubles the next (in twice as many, keeps it)
+SMALLEST_CURRENT_STEP = 1.0 / 256.0  # of the scene's current scale
+CONTACT_RAMP = (1e-5, 1e-4, 1e-3, 1e-2, 1e-1)  # shares of the contact stiffness before its own
+PROGRESS_AFTER_S = 1.0
+
+
+def body_root(sim) -> int:
+    """The node that attaches the lines to the anchor when the anchor is a static unknown, else -1."""
+    if not sim.model.body_active:
+        return -1
+    body = np.nonzero(sim.state.node_i[:, L.NI_KIND] == L.NODE_BODY)[0]
+    return int(body[0]) if body.size else -1
+
+
+def restore_state(st, saved) -> None:
+    """Put the positions, velocities, anchor and line states of ``saved`` back into ``st``."""
+    for name in ("node_pos", "node_vel", "body_state", "seg_f", "line_f"):
+        getattr(st, name)[...] = getattr(saved, name)
+    st.t = saved.t
+
+
+def slack_counts(st, warm: bool) -> np.ndarray:
+    """Slack counts to start from. From the first guess a segment slack in the start state is slack in the
+    equilibrium sought (the guess lays excess line on the seabed shortened), so K lets it go at once. From a warm
+    start none is counted: a corrected wire length leaves the whole wire slack by a few millimetres, and K without
+    the wire's stiffness would let the release point drop in the first step."""
+    if warm:
+        return np.zeros(st.seg_i.shape[0])
+    seg = st.seg_i
+    length = np.linalg.norm(st.node_pos[seg[:, L.SI_B]] - st.node_pos[seg[:, L.SI_A]], axis=1)
+    return np.where(length < st.seg_f[:, L.SF_L0], float(SLACK_PATIENCE), 0.0)
+
+
+class Stage:
+    """Runs the kernel in chunks on one current scale, with the progress bar."""
+
+    def __init__(self, sim, ctl: np.ndarray, max_iter: int, progress: bool, warm: bool) -> None:
+        self.sim, self.ctl, self.max_iter, self.progress = sim, ctl, max_iter, progress
+        self.seg_age = slack_counts(sim.state, warm)
+        self.t0 = time.perf_counter()
+        self.bar = None
+
+    def run(self, scale: float, tol_rel: float, step_tol_m: float, budget: int) -> bool:
+        """Solve at current scale ``scale`` within ``budget`` iterations; True once converged."""
+        sim, ctl = self.sim, self.ctl
+        sim.env_f[L.EF_CUR_SCALE] = scale
+        ctl[C_TOL] = tol_rel
+        ctl[C_STEP_TOL] = step_tol_m
+        ctl[C_STATUS] = STATUS_RUNNING
+        ctl[C_CAP] = 0.0
+        ctl[C_CUTS] = 0.0
+        end = min(self.max_iter, int(ctl[C_ITERATIONS]) + budget)
+        model, state = sim.records()
+        body = body_root(sim)
+        while ctl[C_ITERATIONS] < end and ctl[C_STATUS] == STATUS_RUNNING:
+            try:
+                newton_statics(ctl, min(CHUNK_ITERATIONS, end - int(ctl[C_ITERATIONS])), body, model, state,
+                               self.seg_age)
+            except np.linalg.LinAlgError as exc:  # the anchor's 5x5 system singular or not finite
+                raise StaticsNotConverged(f"static Newton step failed: {exc}") from exc
+            self._show()
+        return ctl[C_STATUS] == STATUS_CONVERGED
+
+    def _show(self) -> None:
+        if self.progress and self.bar is None and time.perf_counter() - self.t0 > PROGRESS_AFTER_S:
+            self.bar = tqdm(total=self.max_iter, desc="statics", unit="it", leave=False)
+        if self.bar is not None:
+            self.bar.n = int(self.ctl[C_ITERATIONS])
+            self.bar.set_postfix(residual=f"{self.ctl[C_RESIDUAL]:.2g}")
+            self.bar.refresh()
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def stiffen_contact(stage: Stage, current: float) -> None:
+    """Solve the first stage's problem (to the stage tolerance) at each share of the line-anchor contact's
+    stiffness in ``CONTACT_RAMP``; the stiffness is its own again afterwards.
+
+    Why: from a guess that hangs a line through the anchor, the full stiffness's first step throws the line out
+    to the nearest face at once, and the loop, held by its slack bottom alone, does not find its way back (most
+    such scenes ended unsolved after 2000 iterations); soft first, the line is pushed out as the loop follows."""
+    contact_f = stage.sim.model.contact_f
+    stiffness = float(contact_f[L.CF_STIFFNESS])
+    try:
+        for share in CONTACT_RAMP:
+            contact_f[L.CF_STIFFNESS] = stiffness * share
+            stage.ctl[C_TAU] = TAU_START_S
+            stage.run(current, STAGE_TOLERANCE, STAGE_STEP_M, STAGE_ITERATIONS)
+    finally:
+        contact_f[L.CF_STIFFNESS] = stiffness
+    stage.ctl[C_TAU] = TAU_START_S
+
+
+def apply_current(stage: Stage, current: float, tol_rel: float, max_iter: int) -> bool:
+    """From the calm equilibrium to the scene's current: in one short stage, else in increments, else in one stage
+    with the iterations left; True once converged.
+
+    Why this order: most scenes take the current in one stage within a few tens of iterations; of those that do
+    not, most reach it in increments within a few hundred, and a few only in one long stage."""
+    sim, ctl = stage.sim, stage.ctl
+    calm = sim.state.copy()
+    calm_age = stage.seg_age.copy()
+    step_tol = STEP_TOLERANCE_M if tol_rel < STAGE_TOLERANCE else STAGE_STEP_M
+    ctl[C_TAU] = TAU_START_S  # pseudo time stepping first: the current swings the lines' soft modes
+    if stage.run(current, tol_rel, step_tol, SHORT_STAGE):
+        return True
+    restore_state(sim.state, calm)
+    stage.seg_age[:] = calm_age
+    if _increments(stage, current, tol_rel, step_tol, min(max_iter, int(ctl[C_ITERATIONS]) + INCREMENT_ITERATIONS)):
+        return True
+    restore_state(sim.state, calm)
+    stage.seg_age[:] = calm_age
+    ctl[C_TAU] = TAU_START_S
+    return stage.run(current, tol_rel, step_tol, max_iter)
+
+
+def _increments(stage: Stage, current: float, tol_rel: float, step_tol: float, max_iter: int) -> bool:
+    """The current in increments from the calm equilibrium (the state), each solved to ``STAGE_TOLERANCE``, doubled
+    or halved by how hard the last one was; True once the scene's current is solved within ``max_iter`` (total)."""
+    sim, ctl = stage.sim, stage.ctl
+    solved, increment, last, last_age = 0.0, 0.25 * current, sim.state.copy(), stage.seg_age.copy()
+    while ctl[C_ITERATIONS] < max_iter:
+        scale = min(solved + increment, current)
+        final = scale >= current
+        retry = increment > SMALLEST_CURRENT_STEP * current
+        ctl[C_TAU] = TAU_START_S
+        start = int(ctl[C_ITERATIONS])
+        budget = STAGE_ITERATIONS if retry else max_iter - start
+        if stage.run(scale, tol_rel if final else max(STAGE_TOLERANCE, tol_rel),
+                     step_tol if final else STAGE_STEP_M, budget):
+            if final:
+                return True
+            used = int(ctl[C_ITERATIONS]) - start
+            increment *= 2.0 if used <= EASY_STAGE else (1.0 if used <= 2 * EASY_STAGE else 0.5)
+            solved, last, last_age = scale, sim.state.copy(), stage.seg_age.copy()
+        elif not retry:
+            return False
+        else:  # back to the last equilibrium with a smaller increment
+            restore_state(sim.state, last)
+            stage.seg_age[:] = last_age
+            increment *= 0.25
+    return False
