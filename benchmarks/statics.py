@@ -266,12 +266,13 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
                 if ref.get("scenes") else "No relaxation-solver comparison in this run.")
     fb = s["fallback"]
     cpu_timed = any("solve_wall_s" in r for r in result["records"])
-    times = ", ".join("stopped" if t is None or t != t else f"{t:g} s" for t in fb["solve_s"])
-    ran = (f"CPU time {times} (stopped: not finished within {result.get('fallback_limit_s', math.nan):g} s of wall "
-           "time)" if cpu_timed else f"it ran {times} (stopped at {result.get('fallback_limit_s', math.nan):g} s)")
-    fb_text = (f"The fallback (`solve_statics` with `method=\"auto\"`) on the first {fb['scenes']} scenes that "
-               f"need it: {fb['converged']} converged; {ran}." if fb["scenes"]
-               else "No scene needed the fallback.")
+    limit = result.get("fallback_limit_s", math.nan)
+    unit = " of CPU time" if cpu_timed else ""
+    ran = ", ".join(f"not finished within {limit:g} s of wall time" if t is None or t != t else f"{t:g} s{unit}"
+                    for t in fb["solve_s"])
+    some = "the one scene that needs" if fb["scenes"] == 1 else f"the first {fb['scenes']} scenes that need"
+    fb_text = (f"The fallback (`solve_statics` with `method=\"auto\"`) on {some} it: {fb['converged']} converged; "
+               f"{ran}." if fb["scenes"] else "No scene needed the fallback.")
     mp = s["moorpy"]
     calm_text = (f"In calm water ({mp['calm_scenes']} scenes) its release point is within "
                  f"{mp['calm_release_point_max_m']:.2g} m and its mooring-line top tension within "

@@ -62,8 +62,8 @@ class AnchorReleaseV1Env(gym.Env):
     installation. What that leaves out (the lag of the release point behind the equilibrium after a full-rate move,
     the dynamic tension peaks) is measured against the dynamic simulation of the same moves by
     ``benchmarks/positioning_quasi_static.py`` (``docs/positioning.md``). A move into a geometry without an
-    equilibrium (the fibre rope on the seabed, a line through the anchor, a line too short) is not carried out: the
-    levers stay, ``info["move_refused"]`` says why.
+    equilibrium (the fibre rope on the seabed, a line too short, a loop resting on the anchor that the static solver
+    does not settle) is not carried out: the levers stay, ``info["move_refused"]`` says why.
 
     A release command above ``positioning.release_threshold`` (0.5) on ``positioning.release_confirm_steps`` (2)
     consecutive steps releases the anchor: the installation then runs as AnchorPlan-v1's from the levers reached
