@@ -78,10 +78,14 @@ class StaticsNotConverged(MoorEnvError, RuntimeError):
     message : str
     residual_rel : float, optional
         Largest residual over its degree of freedom's weight scale when the solver stopped (None if unknown).
+    line_on_anchor : bool
+        A line lay inside the anchor's surface at the start or the end of the solve (where the scene models their
+        contact): the relaxation fallback, which leaves the contact out, is not run for it.
     """
 
-    def __init__(self, message: str, residual_rel: float | None = None) -> None:
+    def __init__(self, message: str, residual_rel: float | None = None, line_on_anchor: bool = False) -> None:
         self.residual_rel = residual_rel
+        self.line_on_anchor = line_on_anchor
         super().__init__(message)
 
 

@@ -102,7 +102,7 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: boo
                 raise StaticsNotConverged(f"the anchor tip hangs {err:+.3g} m from its drop height after 8 wire "
                                           f"corrections (tolerance {tol_m:g} m)", None)
         check_fibre_clearance(sim)
-        check_anchor_clearance(sim)
+        check_anchor_clearance(sim, finished)
     sim.state.line_f[:, L.LF_MAX_TENSION] = 0.0
     wall = time.perf_counter() - t0
     release = None

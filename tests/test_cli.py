@@ -175,9 +175,9 @@ def test_drop_shows_progress_unless_asked_not_to(capsys, monkeypatch):
 def test_statics_and_fall_past_the_threshold_show_a_progress_bar(capsys, monkeypatch):
     """A statics solve shows its bar once it has run ``PROGRESS_AFTER_S`` (1 s; here made negative so that any solve
     counts as long), the fall its simulated time; both on stderr, gone from stdout."""
-    from moor_env.physics import statics
+    from moor_env.physics import statics_stages
 
-    monkeypatch.setattr(statics, "PROGRESS_AFTER_S", -1.0)
+    monkeypatch.setattr(statics_stages, "PROGRESS_AFTER_S", -1.0)
     code = cli.main(["drop", "vertical-chain", "--set", "drop_height_m=2", "--set", "vertical_chain_length_m=4"])
     captured = capsys.readouterr()
     assert code == 0, captured.err

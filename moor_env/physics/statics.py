@@ -28,6 +28,7 @@ there either, so the solve stops with the vessel spacing named as the key to cha
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 
 import numpy as np
 from tqdm.auto import tqdm
@@ -35,7 +36,7 @@ from tqdm.auto import tqdm
 from moor_env.errors import ConfigError, SimulationDiverged, StaticsNotConverged
 from moor_env.physics import layout as L
 from moor_env.physics import statics_relaxation
-from moor_env.physics.statics_guess import deepest_inside_anchor, first_guess
+from moor_env.physics.statics_guess import anchor_intrusion, first_guess
 from moor_env.physics.statics_newton import (
     C_ITERATIONS,
     C_MAX_STEP,
@@ -85,16 +86,19 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS
 
     Where the scene models the line-anchor contact, the lines are solved without it first: an equilibrium with no
     line inside the anchor is one of the contact problem too (every contact force is zero), and most scenes have
-    one. Where a line ends inside the anchor, the contact problem is solved from there; where that solve does not
-    converge, from the start (a warm start that already rests on the anchor goes to the contact problem at once).
-    Where it does not converge with a line resting on the anchor, no fallback is run (the relaxation does not reach
-    those either, in minutes): :class:`StaticsNotConverged` names the vessel spacing.
+    one. Where a line ends inside the anchor, the contact problem is solved from that equilibrium; where the solve
+    without the contact does not converge, from the start (a warm start that already rests on the anchor goes to
+    the contact problem at once). Where a contact solve does not converge and a line lay inside the anchor at its
+    start or end, no fallback is run (the relaxation, which leaves the contact out, does not reach those either):
+    :class:`StaticsNotConverged` names the vessel spacing; the iterations reported count both solves.
     """
     if method not in METHODS:
         raise ConfigError("method", method, "one of " + ", ".join(METHODS))
     start = sim.state.copy()
     if method != "relaxation":
-        report = _by_newton(sim, start, method, (tol_rel, max_iter, max_step_m, warm, analytic_guess, progress))
+        report = _by_newton(sim, start, method, {"tol_rel": tol_rel, "max_iter": max_iter, "max_step_m": max_step_m,
+                                                 "warm": warm, "analytic_guess": analytic_guess,
+                                                 "progress": progress})
         if report is not None:
             return report
         restore_state(sim.state, start)
@@ -108,34 +112,32 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS
             raise _as_not_converged(exc) from exc
 
 
-def _by_newton(sim, start, method: str, args: tuple) -> StaticsReport | None:
+def _by_newton(sim, start, method: str, args: dict) -> StaticsReport | None:
     """:func:`solve_newton` without the line-anchor contact, then with it where needed (:func:`solve_equilibrium`);
-    None where the fallback is to run. ``start``: the state to go back to; ``args``: solve_newton's from tol_rel
-    to progress."""
+    None where the fallback is to run. ``start``: the state to go back to; ``args``: solve_newton's keywords."""
     contact = _contact_modelled(sim)
-    if contact and args[3] and _depth_inside_anchor(sim) > 0.0:
-        return solve_newton(sim, *args, contact=True)
-    failure = None
     try:
-        report = solve_newton(sim, *args, contact=False)
-        if not (contact and _depth_inside_anchor(sim) > 0.0):
-            return report
-    except (StaticsNotConverged, SimulationDiverged) as exc:
-        failure = exc
-    if contact:
+        if contact and args["warm"] and _depth_inside_anchor(sim) > 0.0:
+            return solve_newton(sim, **args, contact=True)
+        failure = None
+        try:
+            clear = solve_newton(sim, **args, contact=False)
+            if not (contact and _depth_inside_anchor(sim) > 0.0):
+                return clear
+        except (StaticsNotConverged, SimulationDiverged) as exc:
+            failure = exc
+        if not contact:
+            raise failure
         if failure is not None:
             restore_state(sim.state, start)
-            contact_args = args
-        else:  # from the equilibrium without the contact, in the scene's current
-            contact_args = (*args[:3], True, False, args[5])
-        try:
-            return solve_newton(sim, *contact_args, contact=True)
-        except (StaticsNotConverged, SimulationDiverged) as exc:
-            if method == "newton" or failure is None or getattr(exc, "line_on_anchor", False):
-                raise _as_not_converged(exc) from exc
-    if method == "newton":
-        raise _as_not_converged(failure) from failure
-    return None
+            return solve_newton(sim, **args, contact=True)
+        # from the equilibrium without the contact, in the scene's current
+        report = solve_newton(sim, **{**args, "warm": True, "analytic_guess": False}, contact=True)
+        return dataclasses.replace(report, iterations=report.iterations + clear.iterations)
+    except (StaticsNotConverged, SimulationDiverged) as exc:
+        if method == "newton" or getattr(exc, "line_on_anchor", False):
+            raise _as_not_converged(exc) from exc
+        return None
 
 
 @contextlib.contextmanager
@@ -221,7 +223,6 @@ def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, a
     sim.env_f[L.EF_SLACK_SMOOTHING] = SMOOTHING_FINAL
     sim.env_f[L.EF_SEABED_SMOOTHING] = 0.0
     depth_m = _depth_inside_anchor(sim)
-    on_anchor = depth_m > 0.0
     try:
         calm = 0.0 if current > 0.0 and not warm else current
         if depth_m > RAMP_DEPTH_M:
@@ -231,6 +232,9 @@ def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, a
                          max_iter)
         if done and not final:
             apply_current(stage, current, tol_rel, max_iter)
+    except StaticsNotConverged as exc:  # the anchor's 5x5 system singular
+        exc.line_on_anchor = depth_m > 0.0 or _depth_inside_anchor(sim) > 0.0
+        raise
     finally:
         sim.env_f[L.EF_CUR_SCALE] = current
         sim.env_f[L.EF_SLACK_SMOOTHING] = 0.0
@@ -240,13 +244,12 @@ def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, a
     iterations = int(ctl[C_ITERATIONS])
     if ctl[C_STATUS] != STATUS_CONVERGED:
         reason = "a non-finite residual" if ctl[C_STATUS] == STATUS_NONFINITE else f"{iterations} iterations"
-        on_anchor = on_anchor or _depth_inside_anchor(sim) > 0.0
-        where = (" with a line resting on the anchor (a larger installation.vessel_spacing_m keeps the loop clear of "
-                 "it)" if on_anchor else "")
-        exc = StaticsNotConverged(f"static equilibrium not reached after {reason}{where} (largest residual/weight "
-                                  f"{ctl[C_RESIDUAL]:.3g}, tolerance {tol_rel:g})", float(ctl[C_RESIDUAL]))
-        exc.line_on_anchor = on_anchor
-        raise exc
+        on_anchor = depth_m > 0.0 or _depth_inside_anchor(sim) > 0.0
+        where = (" with the loop against the anchor (a larger installation.vessel_spacing_m keeps it clear)"
+                 if on_anchor else "")
+        raise StaticsNotConverged(f"static equilibrium not reached after {reason}{where} (largest residual/weight "
+                                  f"{ctl[C_RESIDUAL]:.3g}, tolerance {tol_rel:g})", float(ctl[C_RESIDUAL]),
+                                  line_on_anchor=on_anchor)
     return StaticsReport(iterations, float(ctl[C_RESIDUAL]), 0.0, n_dofs, "newton")
 
 
@@ -256,8 +259,4 @@ def _contact_modelled(sim) -> bool:
 
 def _depth_inside_anchor(sim) -> float:
     """How deep the deepest line node lies inside the anchor [m] where the scene models their contact (else 0)."""
-    if not _contact_modelled(sim):
-        return 0.0
-    st = sim.state
-    return float(deepest_inside_anchor(st.node_pos, st.node_i, st.body_state, sim.model.contact_shape,
-                                       -float(sim.env_f[L.EF_DEPTH]))[0])
+    return anchor_intrusion(sim)[0] if _contact_modelled(sim) else 0.0

@@ -12,8 +12,8 @@ anchor's material point at the node per unknown (translation, then rotation abou
 Left out: the turning of the normal (f_n H) and the moment arm's change, both smaller than k n n^T by the depth
 over the anchor's radius (millimetres over metres at rest); Newton's method keeps the exact residual, so they only
 slow its last iterations, never move its answer. Why not f_n H: far from the solution, with a node centimetres
-inside the convex shaft, it makes the node's block indefinite; measured on the low-spacing scenes of the statics
-benchmark it left more of them unsolved than it solved.
+inside the convex shaft, it makes the node's block indefinite; on the low-spacing scenes of the statics benchmark
+it leaves more of them unsolved than it solves.
 
 A node couples to the anchor outside its attachment, which closes a loop in the tree of lines. The block
 elimination carries it exactly: every eliminated node passes its coupling to the anchor on to its parent (a 3x5

@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from moor_env.errors import NoEquilibrium
+from moor_env.errors import NoEquilibrium, StaticsNotConverged
 from moor_env.physics import layout as L
 from moor_env.physics._jit import jit
 from moor_env.physics.anchor_surface import surface_distance, within_reach
@@ -307,24 +307,32 @@ def deepest_inside_anchor(node_pos, node_i, body_state, shape, seabed_z):
     return deepest, node
 
 
-def check_anchor_clearance(sim) -> None:
-    """Refuse an equilibrium in which a line presses more than ``ANCHOR_CLEARANCE_M`` into the anchor where the
-    scene models their contact: the penalty contact holds a resting line within millimetres, so a deeper node
-    means a load its stiffness cannot carry (a fall from there would start by throwing the line out).
+def check_anchor_clearance(sim, solver: str = "newton") -> None:
+    """Refuse an equilibrium in which a line lies more than ``ANCHOR_CLEARANCE_M`` inside the anchor where the
+    scene models their contact. From Newton's method, which solves the contact, it means a load the contact's
+    stiffness cannot carry (the penalty holds a resting line within millimetres); from the relaxation solver
+    (``solver="relaxation"``), which leaves the contact out, a loop hanging through the anchor.
 
     Raises
     ------
     NoEquilibrium
-        Naming ``discretization.contact_stiffness_scale``.
+        From Newton's method, naming ``discretization.contact_stiffness_scale``.
+    StaticsNotConverged
+        From the relaxation solver.
     """
     if sim.model.contact_f[L.CF_ON] == 0.0:
         return
     depth_m, line = anchor_intrusion(sim)
-    if depth_m > ANCHOR_CLEARANCE_M:
-        disc = sim.model.scene.discretization
-        raise NoEquilibrium("discretization.contact_stiffness_scale", disc.contact_stiffness_scale,
-                            "a stiffer line-anchor contact",
-                            f"the {(line or 'line').replace('_', ' ')} would press {depth_m:.2g} m into the anchor")
+    if depth_m <= ANCHOR_CLEARANCE_M:
+        return
+    name = (line or "line").replace("_", " ")
+    if solver == "relaxation":
+        raise StaticsNotConverged(f"the relaxation solver leaves the line-anchor contact out, and its equilibrium "
+                                  f"hangs the {name} {depth_m:.2g} m through the anchor (a larger "
+                                  "installation.vessel_spacing_m keeps the loop clear of it)", None, True)
+    scale = sim.model.scene.discretization.contact_stiffness_scale
+    raise NoEquilibrium("discretization.contact_stiffness_scale", scale, "a stiffer line-anchor contact",
+                        f"the {name} would press {depth_m:.2g} m into the anchor")
 
 
 def anchor_intrusion(sim) -> tuple[float, str]:

@@ -111,20 +111,21 @@ class Stage:
             self.bar.close()
 
 
-def stiffen_contact(stage: Stage, current: float) -> None:
-    """Solve the first stage's problem (to the stage tolerance) at each share of the line-anchor contact's
-    stiffness in ``CONTACT_RAMP``; the stiffness is its own again afterwards.
+def stiffen_contact(stage: Stage, scale: float) -> None:
+    """Solve the problem at current scale ``scale`` (to the stage tolerance) at each share of the line-anchor
+    contact's stiffness in ``CONTACT_RAMP``; the stiffness is its own again afterwards.
 
-    Why: from a guess that hangs a line through the anchor, the full stiffness's first step throws the line out
-    to the nearest face at once, and the loop, held by its slack bottom alone, does not find its way back (most
-    such scenes ended unsolved after 2000 iterations); soft first, the line is pushed out as the loop follows."""
+    Why: from a state that hangs a line through the anchor, the full stiffness's first step throws the line out to
+    the nearest face at once, and the loop, held by its slack bottom alone, does not find its way back (from there
+    most such scenes do not converge within 2000 iterations); soft first, the line is pushed out as the loop
+    follows."""
     contact_f = stage.sim.model.contact_f
     stiffness = float(contact_f[L.CF_STIFFNESS])
     try:
         for share in CONTACT_RAMP:
             contact_f[L.CF_STIFFNESS] = stiffness * share
             stage.ctl[C_TAU] = TAU_START_S
-            stage.run(current, STAGE_TOLERANCE, STAGE_STEP_M, STAGE_ITERATIONS)
+            stage.run(scale, STAGE_TOLERANCE, STAGE_STEP_M, STAGE_ITERATIONS)
     finally:
         contact_f[L.CF_STIFFNESS] = stiffness
     stage.ctl[C_TAU] = TAU_START_S

@@ -297,3 +297,24 @@ def test_hard_scenes_converge(overrides):
     scene = {"fidelity": "fast", NO_CONTACT: "off", **overrides}
     static = solve_statics(load_scene("gjoa-500", scene), progress=False, method="newton")
     assert _residual_ratio(static) < 1e-4
+
+
+def test_anchor_clearance_depth_is_the_surface_distance():
+    """Reference: the anchor's surface (gjoa-500: one cylinder of radius 0.6 m, 13 m long); a node on the axis at
+    the cylinder's middle lies inside by the radius, one a metre beside it lies outside (depth 0). Tolerance
+    1e-9 m."""
+    from moor_env.physics.statics_guess import deepest_inside_anchor
+
+    sim = solve_statics(load_scene("gjoa-500", {"fidelity": "fast"}), progress=False).simulator
+    shape = sim.model.contact_shape
+    body = sim.state.body_state
+    axis = body[L.BS_AXIS:L.BS_AXIS + 3]
+    radius = float(shape[0, L.CS_RADIUS])
+    centre = body[L.BS_POS:L.BS_POS + 3] + 0.5 * (shape[0, L.CS_FRONT] + shape[0, L.CS_BACK]) * axis
+    side = np.cross(axis, [0.0, 1.0, 0.0])
+    beside = centre + (radius + 1.0) * side / np.linalg.norm(side)
+    kinds = np.zeros((1, sim.state.node_i.shape[1]), dtype=np.int64)
+    kinds[0, L.NI_KIND] = L.NODE_FREE
+    depth, node = deepest_inside_anchor(centre[None, :], kinds, body, shape, -1e9)
+    assert depth == pytest.approx(radius, abs=1e-9) and node == 0
+    assert deepest_inside_anchor(beside[None, :], kinds, body, shape, -1e9) == (0.0, -1)

@@ -166,3 +166,24 @@ def test_contact_too_soft_to_hold_the_loop_is_refused():
                       progress=False)
     assert info.value.key == "discretization.contact_stiffness_scale"
     assert "into the anchor" in info.value.cause
+
+
+def test_clearance_check_after_each_solver():
+    """The lines' equilibrium without the contact hangs the loop 0.4 m through the anchor (vessels 0 m apart): from
+    the relaxation solver, which leaves the contact out, that is a StaticsNotConverged naming the spacing; from
+    Newton's method, which solves the contact, it would mean a contact too soft (NoEquilibrium naming its
+    stiffness scale)."""
+    from moor_env import Simulator
+    from moor_env.compile import compile_scene
+    from moor_env.physics.statics import solve_newton
+    from moor_env.physics.statics_guess import check_anchor_clearance
+
+    sim = Simulator(compile_scene(load_scene("gjoa-500", RESTING[0])))
+    solve_newton(sim, progress=False, contact=False)
+    assert anchor_intrusion(sim)[0] > ANCHOR_CLEARANCE_M
+    with pytest.raises(StaticsNotConverged, match="installation.vessel_spacing_m") as info:
+        check_anchor_clearance(sim, "relaxation")
+    assert info.value.line_on_anchor
+    with pytest.raises(NoEquilibrium) as refused:
+        check_anchor_clearance(sim, "newton")
+    assert refused.value.key == "discretization.contact_stiffness_scale"
