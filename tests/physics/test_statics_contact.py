@@ -15,6 +15,7 @@ from moor_env import load_scene, solve_statics
 from moor_env.errors import NoEquilibrium, StaticsNotConverged
 from moor_env.physics import layout as L
 from moor_env.physics.statics_guess import ANCHOR_CLEARANCE_M, anchor_intrusion
+from tests.physics.test_statics import _residual_ratio
 
 RESTING = [
     {"vessel_spacing_m": 0.0, "fidelity": "fast"},
@@ -31,20 +32,6 @@ RESTING = [
 ]
 
 
-def _residual_ratio(sim) -> float:
-    """Largest free-node residual over the node's weight, the contact included, on the solver's final law."""
-    from moor_env.physics.statics import SMOOTHING_FINAL
-
-    sim.env_f[L.EF_SLACK_SMOOTHING] = SMOOTHING_FINAL
-    try:
-        sim.evaluate_loads()
-    finally:
-        sim.env_f[L.EF_SLACK_SMOOTHING] = 0.0
-    free = sim.state.node_i[:, L.NI_KIND] == L.NODE_FREE
-    weight = sim.work.node_mass[free] * sim.env_f[L.EF_G]
-    return float(np.max(np.abs(sim.work.node_force[free]) / weight[:, None]))
-
-
 @pytest.mark.parametrize("overrides", RESTING)
 def test_loop_rests_on_the_anchor(overrides):
     """Newton's method reaches the equilibrium with the loop against the anchor: residual below 1e-4 of every
@@ -52,7 +39,7 @@ def test_loop_rests_on_the_anchor(overrides):
     millimetre (the contact's penalty at rest; the acceptance limit is 5 cm), the tip at its drop height."""
     static = solve_statics(load_scene("gjoa-500", overrides), progress=False, method="newton")
     sim = static.simulator
-    assert _residual_ratio(sim) < 1e-4
+    assert _residual_ratio(static) < 1e-4
     assert sim.work.contact_out[L.CO_NODES] >= 1 and sim.work.contact_out[L.CO_FORCE] > 0.0
     depth, line = anchor_intrusion(sim)
     assert 0.0 < depth < 1e-3 < ANCHOR_CLEARANCE_M and line == "mooring_line"
