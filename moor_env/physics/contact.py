@@ -61,6 +61,16 @@ from moor_env.physics.layout import (
 )
 
 
+@jit
+def may_touch(node_pos, node_i, n, body_state, shape, seabed_z, margin_m=0.0):
+    """Whether node n is one the contact acts on and lies within ``margin_m`` [m] of the anchor's bounding
+    cylinder: a free node above the seabed (``seabed_z`` [m]; below it the anchor is in the soil, which strips a
+    line off it)."""
+    if node_i[n, NI_KIND] != NODE_FREE or node_pos[n, 2] < seabed_z:
+        return False
+    return within_reach(node_pos[n, 0], node_pos[n, 1], node_pos[n, 2], body_state, shape, margin_m)
+
+
 # features of the surface nearest to a point
 @jit
 def relative_velocity(px, py, pz, vx, vy, vz, body_state):
@@ -226,19 +236,17 @@ def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_st
 
     The node's mass in the damping is its structural mass (``node_mass``, welded parts included); its added mass
     (a few % for chain) only makes the contact slightly softer and less damped than chosen. Nodes below the seabed
-    (``seabed_z`` [m]) are left to the seabed: there the anchor is in the soil, which strips a line off it.
+    (``seabed_z`` [m]) are left to the seabed (:func:`may_touch`).
     """
     lx = ly = lz = mx = my = mz = 0.0
     count = 0
     deepest = 0.0
     for n in range(node_i.shape[0]):
-        if node_i[n, NI_KIND] != NODE_FREE:
+        if not may_touch(node_pos, node_i, n, body_state, shape, seabed_z):
             continue
         px = node_pos[n, 0]
         py = node_pos[n, 1]
         pz = node_pos[n, 2]
-        if pz < seabed_z or not within_reach(px, py, pz, body_state, shape):
-            continue
         depth, fx, fy, fz = contact_force(px, py, pz, node_vel[n, 0], node_vel[n, 1], node_vel[n, 2], node_mass[n],
                                           body_state, shape, contact_f)
         if depth == 0.0:

@@ -29,7 +29,8 @@ from __future__ import annotations
 
 from moor_env.physics import layout as L
 from moor_env.physics._jit import jit_step
-from moor_env.physics.anchor_surface import from_cog, surface_distance, within_reach
+from moor_env.physics.anchor_surface import from_cog, surface_distance
+from moor_env.physics.contact import may_touch
 
 REACH_M = 2.0  # nodes this close to the anchor's bounding cylinder may enter the contact in one step
 G_DEPTH = 0  # contact geometry of a candidate node: depth (negative: gap) [m], normal, J^T n (5)
@@ -54,8 +55,8 @@ def _jn(basis, rx, ry, rz, nx, ny, nz, geo, n):
 @jit_step
 def contact_geometry(basis, model, state, geo, cand, cin):
     """Depth, normal and J^T n of every free node near the anchor (``cand`` 1) at the present state; ``cin`` 1
-    where it is inside now. Nodes below the seabed are left to it, as in ``contact.add_contact_loads``. Returns the
-    number of candidates."""
+    where it is inside now: the nodes the contact acts on (``contact.may_touch``). Returns the number of
+    candidates."""
     node_pos = state.node_pos
     node_i = state.node_i
     body_state = state.body_state
@@ -65,12 +66,11 @@ def contact_geometry(basis, model, state, geo, cand, cin):
     for n in range(node_pos.shape[0]):
         cand[n] = 0
         cin[n] = 0
+        if not may_touch(node_pos, node_i, n, body_state, shape, seabed, REACH_M):
+            continue
         px = node_pos[n, 0]
         py = node_pos[n, 1]
         pz = node_pos[n, 2]
-        if node_i[n, L.NI_KIND] != L.NODE_FREE or pz < seabed or not within_reach(px, py, pz, body_state, shape,
-                                                                                   REACH_M):
-            continue
         sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(px, py, pz, body_state, shape)
         rx, ry, rz, _ = from_cog(px, py, pz, body_state)
         geo[n, G_DEPTH] = -sd

@@ -21,8 +21,9 @@ import numpy as np
 from moor_env.errors import NoEquilibrium, StaticsNotConverged
 from moor_env.physics import layout as L
 from moor_env.physics._jit import jit
-from moor_env.physics.anchor_surface import surface_distance, within_reach
+from moor_env.physics.anchor_surface import surface_distance
 from moor_env.physics.catenary_kernels import hang_line, walk, walk_arcs
+from moor_env.physics.contact import may_touch
 from moor_env.physics.discrete_catenary import discrete_grounded, discrete_hang
 from moor_env.physics.loads import set_constrained_nodes
 
@@ -293,14 +294,9 @@ def deepest_inside_anchor(node_pos, node_i, body_state, shape, seabed_z):
     deepest = 0.0
     node = -1
     for n in range(node_i.shape[0]):
-        if node_i[n, L.NI_KIND] != L.NODE_FREE or node_pos[n, 2] < seabed_z:
+        if not may_touch(node_pos, node_i, n, body_state, shape, seabed_z):
             continue
-        px = node_pos[n, 0]
-        py = node_pos[n, 1]
-        pz = node_pos[n, 2]
-        if not within_reach(px, py, pz, body_state, shape):
-            continue
-        depth = -surface_distance(px, py, pz, body_state, shape)[0]
+        depth = -surface_distance(node_pos[n, 0], node_pos[n, 1], node_pos[n, 2], body_state, shape)[0]
         if depth > deepest:
             deepest = depth
             node = n
