@@ -85,6 +85,16 @@ def contact_geometry(basis, model, state, geo, cand, cin):
 
 
 @jit_step
+def _add_normal_force(force_n, geo, n, rhs, body_r):
+    """A force ``force_n`` [N] along candidate n's normal into its right-hand side, its reaction into the
+    anchor's (-force J^T n)."""
+    for i in range(3):
+        rhs[n, i] += force_n * geo[n, G_NORMAL + i]
+    for i in range(5):
+        body_r[i] -= force_n * geo[n, G_JN + i]
+
+
+@jit_step
 def add_contact_blocks(model, state, geo, cand, cin, dmat, bmat, cmat, coupled, body_a, body_r):
     """The contact's terms of the step (module docstring): node blocks into ``dmat``, the couplings into
     ``bmat`` (node-anchor, 3x5) and ``cmat`` (anchor-node, 5x3), the anchor's block into ``body_a`` and the
@@ -105,16 +115,10 @@ def add_contact_blocks(model, state, geo, cand, cin, dmat, bmat, cmat, coupled, 
         inside_now = depth > 0.0
         if cin[n] == 0:
             if inside_now:  # lets go during the step: its present force goes
-                for i in range(3):
-                    rhs[n, i] -= k * depth * geo[n, G_NORMAL + i]
-                for i in range(5):
-                    body_r[i] += k * depth * geo[n, G_JN + i]
+                _add_normal_force(-k * depth, geo, n, rhs, body_r)
             continue
         if not inside_now:  # the gap to close before the anchor holds the node
-            for i in range(3):
-                rhs[n, i] += k * depth * geo[n, G_NORMAL + i]
-            for i in range(5):
-                body_r[i] -= k * depth * geo[n, G_JN + i]
+            _add_normal_force(k * depth, geo, n, rhs, body_r)
         for i in range(3):
             for j in range(3):
                 dmat[n, i, j] += k * geo[n, G_NORMAL + i] * geo[n, G_NORMAL + j]
