@@ -14,6 +14,7 @@ import math
 from moor_env.physics._jit import jit
 
 ROOT_ITERATIONS = 200
+NEWTON_ITERATIONS = 50
 
 
 @jit
@@ -175,11 +176,12 @@ def hang_line(dx, dz, seabed_dz, sec_w, sec_ea, sec_len, arcs, out):
     for k in range(n_sec):
         total += sec_len[k]
         weight += sec_w[k] * sec_len[k]
-    # suspended: H from the horizontal span (increasing in H)
-    h_lo = 1e-9 * weight + 1e-6
-    h_hi = 10.0 * weight + 1.0
-    h = _suspended_h(dx, dz, sec_w, sec_ea, sec_len, total, weight, h_lo, h_hi)
-    va = suspended_va(h, dz, sec_w, sec_ea, sec_len, total, weight)
+    # suspended: Newton's method on (H, V_A); where it does not converge, nested bracketing (H from the
+    # horizontal span, increasing in H)
+    h, va, converged = _suspended_newton(dx, dz, sec_w, sec_ea, sec_len, total, weight)
+    if not converged:
+        h = _suspended_h(dx, dz, sec_w, sec_ea, sec_len, total, weight, 1e-9 * weight + 1e-6, 10.0 * weight + 1.0)
+        va = suspended_va(h, dz, sec_w, sec_ea, sec_len, total, weight)
     low = 0.0
     if va < 0.0 < va + weight:
         cum = 0.0
@@ -207,6 +209,64 @@ def _arc_at(sec_len, k):
     for j in range(k):
         a += sec_len[j]
     return a
+
+
+@jit
+def _walk_jacobian(h, v0, sec_w, sec_ea, sec_len):
+    """(x, z) of the whole line from end A (H = h > 0, vertical force v0 there, every section heavy) and their
+    partial derivatives (dx/dH, dx/dV0, dz/dH, dz/dV0): the sums of :func:`_piece`'s closed-form derivatives."""
+    x = z = x_h = x_v = z_h = z_v = 0.0
+    v = v0
+    for k in range(sec_len.shape[0]):
+        w, ea, ds = sec_w[k], sec_ea[k], sec_len[k]
+        r0, r1 = v / h, (v + w * ds) / h
+        s0, t1 = math.sqrt(1.0 + r0 * r0), math.sqrt(1.0 + r1 * r1)
+        x += h / w * (math.asinh(r1) - math.asinh(r0)) + h * ds / ea
+        z += h / w * (t1 - s0) + ((v + w * ds) ** 2 - v * v) / (2.0 * w * ea)
+        x_h += (math.asinh(r1) - math.asinh(r0) - r1 / t1 + r0 / s0) / w + ds / ea
+        x_v += (1.0 / t1 - 1.0 / s0) / w
+        z_h += (1.0 / t1 - 1.0 / s0) / w
+        z_v += (r1 / t1 - r0 / s0) / w + ds / ea
+        v += w * ds
+    return x, z, x_h, x_v, z_h, z_v
+
+
+@jit
+def _suspended_newton(dx, dz, sec_w, sec_ea, sec_len, total, weight):
+    """(H, V_A, converged) of the suspended line spanning (dx, dz) by Newton's method on both, from the
+    parabola's estimate (V_A = H dz / dx - W / 2, H from its sag); H is kept within a factor ten per step.
+
+    Why: the nested bracketing it stands in for takes some hundred passes over the line; this takes a few. It
+    is not tried on a vertical or nearly vertical span, nor on a line with a section that does not sink (the
+    closed form needs w > 0), and reports failure after ``NEWTON_ITERATIONS``."""
+    if dx <= 1e-3 * total:
+        return 0.0, 0.0, False
+    for k in range(sec_len.shape[0]):
+        if sec_w[k] <= 0.0:
+            return 0.0, 0.0, False
+    chord = math.sqrt(dx * dx + dz * dz)
+    # a parabola of length total over the chord sags by sqrt(3 chord (total - chord) / 8); H = W dx / (8 sag)
+    sag = math.sqrt(max(3.0 * chord * (total - chord) / 8.0, 1e-6 * total * total))
+    h = weight * dx / (8.0 * sag)
+    va = h * dz / dx - 0.5 * weight
+    tol = 1e-10 * (total + chord)
+    for _ in range(NEWTON_ITERATIONS):
+        x, z, x_h, x_v, z_h, z_v = _walk_jacobian(h, va, sec_w, sec_ea, sec_len)
+        fx, fz = x - dx, z - dz
+        if abs(fx) < tol and abs(fz) < tol:
+            return h, va, True
+        det = x_h * z_v - x_v * z_h
+        if not (det != 0.0 and det == det):
+            return h, va, False
+        step_h = -(z_v * fx - x_v * fz) / det
+        step_v = -(x_h * fz - z_h * fx) / det
+        if h + step_h < 0.1 * h or h + step_h > 10.0 * h:
+            f = (-0.9 * h if h + step_h < 0.1 * h else 9.0 * h) / step_h
+            step_h *= f
+            step_v *= f
+        h += step_h
+        va += step_v
+    return h, va, False
 
 
 @jit

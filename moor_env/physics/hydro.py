@@ -12,8 +12,8 @@ Derivatives of the drag, beside it (with c_n = 1/2 rho Cd_n D len, c_t = 1/2 rho
 
 - with respect to the structure's velocity (:func:`add_slender_drag_dv`, the implicit step's damping):
   -df/dv = df/dv_r = c_n (|v_rn| (I - q q^T) + v_rn v_rn^T / |v_rn|) + 2 c_t |v_t| q q^T, symmetric;
-- with respect to the unit tangent at fixed relative velocity (:func:`slender_drag_dq`, the static solver's
-  drag stiffness on a line that turns).
+- with respect to the unit tangent at fixed relative velocity, projected on the tangent's turns
+  (:func:`slender_drag_turn`, the static solver's drag stiffness on a line that turns).
 """
 
 from __future__ import annotations
@@ -65,27 +65,27 @@ def add_slender_added_mass(mm, node, qx, qy, qz, normal_mass, tangential_mass):
 
 
 @jit
-def slender_drag_dq(vrx, vry, vrz, qx, qy, qz, half_rho_cdn_d_len, half_rho_cdt_pid_len, out):
-    """Derivative of :func:`slender_drag` with respect to the unit tangent q at fixed relative velocity:
-    ``out[i, j] = d f_i / d q_j`` [N] (the static solver's Jacobian of current drag on a line that turns).
+def slender_drag_turn(vrx, vry, vrz, qx, qy, qz, half_rho_cdn_d_len, half_rho_cdt_pid_len, out):
+    """The change of :func:`slender_drag` as its unit tangent q turns, at fixed relative velocity:
+    ``out = (d f / d q) P`` with P = I - q q^T the turn's projection [N] (the static solver's Jacobian of current
+    drag on a line that turns: a segment's end moved by dx turns q by P dx / length).
 
-    With v_t = v_r . q and v_rn = v_r - v_t q: d f / d q = -cn (|v_rn| I + v_rn v_rn^T / |v_rn|)(q v_r^T + v_t I)
-    + ct |v_t| (2 q v_r^T + v_t I).
+    With v_t = v_r . q and n = v_r - v_t q (so that n . q = 0 and v_r^T P = n^T):
+    d f / d q = -c_n (|n| I + n n^T / |n|)(q v_r^T + v_t I) + c_t |v_t| (2 q v_r^T + v_t I), hence
+    (d f / d q) P = (2 c_t |v_t| - c_n |n|) q n^T + (c_t |v_t| - c_n |n|) v_t P - c_n v_t n n^T / |n|.
     """
     vt = vrx * qx + vry * qy + vrz * qz
     n = (vrx - vt * qx, vry - vt * qy, vrz - vt * qz)
     vn = math.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
     q = (qx, qy, qz)
-    vr = (vrx, vry, vrz)
-    cn = half_rho_cdn_d_len
-    ct = half_rho_cdt_pid_len * abs(vt)
+    tangential = half_rho_cdt_pid_len * abs(vt)
+    along_q = 2.0 * tangential - half_rho_cdn_d_len * vn
+    iso = (tangential - half_rho_cdn_d_len * vn) * vt
+    across = -half_rho_cdn_d_len * vt / vn if vn > 0.0 else 0.0
     for i in range(3):
         for j in range(3):
-            # (q v_r^T + v_t I)[k, j] contracted with (|v_rn| I + n n^T / |v_rn|)[i, k]
-            a = vn * (q[i] * vr[j] + (vt if i == j else 0.0))
-            if vn > 0.0:
-                a += n[i] * (n[0] * q[0] + n[1] * q[1] + n[2] * q[2]) * vr[j] / vn + n[i] * n[j] * vt / vn
-            out[i, j] = -cn * a + ct * (2.0 * q[i] * vr[j] + (vt if i == j else 0.0))
+            out[i, j] = (along_q * q[i] * n[j] + iso * ((1.0 if i == j else 0.0) - q[i] * q[j])
+                         + across * n[i] * n[j])
 
 
 @jit_step

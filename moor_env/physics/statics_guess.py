@@ -4,8 +4,9 @@ The installation's lines meet at the release point R: the vertical chain hangs f
 mooring line runs from it to the second vessel, and the wire holds it from the installation vessel. R's
 horizontal position follows from the balance of the wire and the mooring line (each a catenary with the same
 horizontal force), its height from the drop height (anchor tip ``drop_height_m`` above the seabed); the wire's
-unstretched length is set so that it reaches there. A few fixed-point rounds of this balance cost well under a
-millisecond (``catenary.hang_line``). Current is left to the Newton solve.
+unstretched length is set so that it reaches there. The fixed-point rounds of this balance run in one kernel
+(:func:`balance_rounds`, each a Newton solve of the suspended mooring line in ``catenary_kernels.hang_line``).
+Current is left to the Newton solve.
 
 Scenes with no equilibrium are refused here, before any Newton iteration (:class:`moor_env.errors.NoEquilibrium`):
 a release point that the drop height puts above the installation vessel's fairlead, and a mooring line so short
@@ -68,6 +69,8 @@ def _hang(sim, name: str, a: np.ndarray, b: np.ndarray, place: bool) -> tuple[fl
     dx = float(np.hypot(*horizontal))
     u = horizontal / dx if dx > 1e-9 else np.array([1.0, 0.0])
     seabed_dz = min(-sim.env_f[L.EF_DEPTH] - float(a[2]), 0.0)
+    if not place:  # the forces only: no interior points to walk to
+        arcs = arcs[:0]
     out = np.zeros((arcs.size, 2))
     dz = float(b[2] - a[2])
     h, v_a, mode = hang_line(dx, dz, seabed_dz, sec_w, sec_ea, sec_len, arcs, out)
@@ -207,6 +210,36 @@ def _check_mooring_line(sim, release: np.ndarray) -> tuple[float, float]:
     return h, v_a
 
 
+@jit
+def balance_rounds(release, u, top_a, top_m, target_z, hang_n, seabed_z, sec_w, sec_ea, sec_len, m_w, m_ea, m_len):
+    """Fixed-point rounds of the release point's balance (at most ``BALANCE_ROUNDS``): the mooring line (sections
+    ``m_*``, none without one) hung from ``release`` to its top ``top_m`` gives (H, V) there, and the wire from its
+    top ``top_a`` carrying H and the rest of ``hang_n`` [N] reaches the new release point, its unstretched sections
+    ``sec_len`` scaled so that it ends at ``target_z``. ``release``, its horizontal direction to the mooring line
+    ``u`` and ``sec_len`` are updated in place; returns the mooring line's (H, V) [N] at the release point."""
+    no_arcs = np.empty(0)
+    no_out = np.empty((0, 2))
+    h_m = v_m = 0.0
+    for _ in range(BALANCE_ROUNDS):
+        if m_len.shape[0] > 0:
+            tx, ty = top_m[0] - release[0], top_m[1] - release[1]
+            norm = math.hypot(tx, ty)
+            h_m, v_m, _ = hang_line(norm, top_m[2] - release[2], min(seabed_z - release[2], 0.0), m_w, m_ea, m_len,
+                                    no_arcs, no_out)
+            if norm > 1e-9:
+                u[0], u[1] = tx / norm, ty / norm
+        v_w = max(hang_n - v_m, 1e-3 * hang_n)
+        x_w, z_w, _ = walk(h_m, v_w, sec_w, sec_ea, sec_len, 0.0, np.sum(sec_len))
+        new_x, new_y = top_a[0] + x_w * u[0], top_a[1] + x_w * u[1]
+        error = top_a[2] - z_w - target_z
+        sec_len *= 1.0 + error / np.sum(sec_len)
+        moved = math.hypot(new_x - release[0], new_y - release[1])
+        release[0], release[1], release[2] = new_x, new_y, target_z
+        if moved < 1e-6 and abs(error) < 1e-6:
+            break
+    return h_m, v_m
+
+
 def _balance_release_point(sim, release: np.ndarray, target_z: float, hang_n: float) -> np.ndarray:
     """Release point where the wire (holding ``hang_n`` below it) balances the mooring line, at ``target_z``;
     sets the wire's unstretched length and places its nodes."""
@@ -220,25 +253,13 @@ def _balance_release_point(sim, release: np.ndarray, target_z: float, hang_n: fl
                             "the anchor cannot hang that high: the release point would be above the installation "
                             "vessel's fairlead")
     sec_w, sec_ea, sec_len, _, arcs = line_arrays(sim, "wire")
-    h_m = v_m = 0.0
+    sec_len = sec_len.copy()
     u = np.array([1.0, 0.0])
-    for _ in range(BALANCE_ROUNDS):
-        if "mooring_line" in m.lines:
-            h_m, v_m = _hang(sim, "mooring_line", release, _top(sim, "mooring_line"), place=False)[:2]
-            towards = _top(sim, "mooring_line")[:2] - release[:2]
-            norm = float(np.hypot(*towards))
-            if norm > 1e-9:
-                u = towards / norm
-        v_w = max(hang_n - v_m, 1e-3 * hang_n)
-        x_w, z_w, _ = walk(h_m, v_w, sec_w, sec_ea, sec_len, 0.0, float(np.sum(sec_len)))
-        new = np.array([top_a[0] + x_w * u[0], top_a[1] + x_w * u[1], top_a[2] - z_w])
-        error = new[2] - target_z
-        sec_len = sec_len * (1.0 + error / float(np.sum(sec_len)))
-        moved = float(np.linalg.norm(new[:2] - release[:2]))
-        release = np.array([new[0], new[1], target_z])
-        if moved < 1e-6 and abs(error) < 1e-6:
-            break
-    if "mooring_line" in m.lines:  # the line's strength at the balanced release point, not on the way there
+    mooring = "mooring_line" in m.lines
+    m_w, m_ea, m_len = line_arrays(sim, "mooring_line")[:3] if mooring else (sec_w[:0], sec_ea[:0], sec_len[:0])
+    h_m, v_m = balance_rounds(release, u, top_a, _top(sim, "mooring_line") if mooring else top_a, target_z, hang_n,
+                              -float(sim.env_f[L.EF_DEPTH]), sec_w, sec_ea, sec_len, m_w, m_ea, m_len)
+    if mooring:  # the line's strength at the balanced release point, not on the way there
         _check_mooring_line(sim, release)
     start, nseg = st.line_i[wire, L.LI_SEG_START], st.line_i[wire, L.LI_NSEG]
     total = float(np.sum(sec_len))

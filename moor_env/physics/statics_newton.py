@@ -11,9 +11,12 @@ when the residual fell as much and the next step is at most ``GROWTH`` times lon
 in one stiff segment makes a large, harmless residual there). Otherwise the state goes back and the same step is
 taken shorter; after ``LINE_SEARCH_CUTS`` cuts the pseudo time step tau is cut tenfold instead. A full step that
 is kept grows tau fourfold (switched evolution relaxation), so that the iteration becomes Newton's method near the
-solution; a step longer than ``OVERSIZE`` step limits cuts tau at once (K nearly singular: a part of the model held
-by slack segments alone). Converged when the residual is within tolerance and the step at the state is below the
-step tolerance.
+solution; while tau <= ``TAU_NEWTON_S`` the step is solved again at the grown tau. Beyond it (tau >= 2560 s from
+the start's 10 s) D / tau^2 is below 2e-4 N/m per tonne of a node's mass and 0.02 N/m on the anchor, a thousandth
+or less of the least stiffness K keeps on a slack segment (``SLACK_STIFFNESS`` EA / l0: 20-75 N/m on the
+polyester), so that the step no longer changes with tau. A step longer than ``OVERSIZE`` step limits cuts tau at
+once (K nearly singular: a part of the model held by slack segments alone). Converged when the residual is within
+tolerance and the step at the state is below the step tolerance.
 """
 
 from __future__ import annotations
@@ -31,7 +34,7 @@ from moor_env.physics.tree import OR_ORDER, TR_DEG, TR_NB, build_tree, order
 SMOOTHING_FINAL = 1e-8  # strain scale of the tension-only law's rounded kink: EA 1e-8 / 2 (9 N on 142 mm chain)
 MAX_ROTATION_RAD = 0.2  # largest anchor tilt change per step
 TAU_START_S = 10.0
-TAU_NEWTON_S = 1e4  # above this the node masses no longer change the step
+TAU_NEWTON_S = 1e3  # above this the node masses no longer change the step (module docstring)
 TAU_MAX_S = 1e12
 OVERSIZE = 10.0  # a step this many step limits long means K is nearly singular: tau is cut
 SHRINK = 0.25  # a kept step shortens the next by this share of its own length at least (or the residual as much)

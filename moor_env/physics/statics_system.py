@@ -9,7 +9,7 @@ equilibrium is an exact rest state of the dynamic model. A step solves::
 D the node masses and the anchor's inertia (the pseudo-transient term), K = -dF/dx analytic: per segment
 dT/dl q q^T + (T / l)(I - q q^T) (elastic and geometric stiffness), the seabed's vertical stiffness, for the anchor
 J^T S J plus the geometric stiffness of its arms (a force f at axial coordinate s resists a tilt by s (e . f)),
-and the current drag's change with each segment's direction (``hydro.slender_drag_dq``); the drag's change with
+and the current drag's change with each segment's direction (``hydro.slender_drag_turn``); the drag's change with
 depth and the anchor's own drag are left out. The system is solved in O(N) by block elimination over the tree of
 lines (``physics/tree.py``), leaves first, the anchor's five unknowns (position, two tilt angles) at the root.
 The lines' contact with the anchor's body adds its own terms and couplings (``physics/statics_contact.py``).
@@ -34,7 +34,7 @@ import numpy as np
 from moor_env.physics import layout as L
 from moor_env.physics._jit import jit_step
 from moor_env.physics.environment import current_velocity
-from moor_env.physics.hydro import slender_drag_dq
+from moor_env.physics.hydro import slender_drag_turn
 from moor_env.physics.linalg3 import inverse3
 from moor_env.physics.line import half_segment_morison, segment_axis, smoothed_tension_slope_n
 from moor_env.physics.loads import compute_loads, set_constrained_nodes
@@ -165,7 +165,6 @@ def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling
     smoothing = env_f[L.EF_SLACK_SMOOTHING]
     rho = env_f[L.EF_RHO]
     kmat = np.empty((3, 3))
-    dq = np.empty((3, 3))
     for s in range(seg_i.shape[0]):
         coupling[s, :, :, :] = 0.0
         if seg_i[s, L.SI_ACTIVE] == 0:
@@ -206,10 +205,7 @@ def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling
         for end in range(2):
             node = a if end == 0 else b
             ux, uy, uz = current_velocity(node_pos[node, 2], env_f, model.current_profile)
-            slender_drag_dq(ux, uy, uz, qx, qy, qz, cn, ct, dq)
-            for i in range(3):
-                for j in range(3):
-                    kmat[i, j] = (dq[i, j] - (dq[i, 0] * q[0] + dq[i, 1] * q[1] + dq[i, 2] * q[2]) * q[j]) / length
+            slender_drag_turn(ux, uy, uz, qx, qy, qz, cn / length, ct / length, kmat)
             # K = -dF/dx: this end's row gets +D P / l from x_a and -D P / l from x_b
             if end == 0:
                 if ea >= 0:
