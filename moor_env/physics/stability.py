@@ -103,20 +103,18 @@ def stable_time_step(model_arrays: dict, integrator: str) -> tuple[float, str]:
     weight = np.zeros(nn)
     contact = np.zeros(nn)
     drag = np.zeros(nn)
-    zeta_max = 0.0
     active = np.nonzero(seg_i[:, SI_ACTIVE])[0]
     rho, g = env_f[EF_RHO], env_f[EF_G]
-    for s in active:
-        m = seg_i[s, SI_MAT]
-        l0 = seg_f[s, SF_L0]
-        zeta_max = max(zeta_max, mat_f[m, MF_ZETA])
-        for n in (seg_i[s, SI_A], seg_i[s, SI_B]):
-            o = owner[n]
-            mass[o] += 0.5 * l0 * mat_f[m, MF_MASS]
-            stiff[o] += mat_f[m, MF_EA] / l0
-            weight[o] += 0.5 * l0 * max(mat_f[m, MF_SUBMERGED], 0.0) * g
-            contact[o] += 0.5 * l0 * mat_f[m, MF_D]
-            drag[o] += rho * mat_f[m, MF_CDN] * mat_f[m, MF_D] * 0.5 * l0 * REFERENCE_SPEED_M_S
+    m = seg_i[active, SI_MAT]
+    l0 = seg_f[active, SF_L0]
+    zeta_max = max(float(mat_f[m, MF_ZETA].max()), 0.0) if active.size else 0.0
+    # each segment's share to both its ends, end A before end B, segment by segment (np.add.at sums in that order)
+    ends = owner[np.stack([seg_i[active, SI_A], seg_i[active, SI_B]], axis=1).ravel()]
+    np.add.at(mass, ends, np.repeat(0.5 * l0 * mat_f[m, MF_MASS], 2))
+    np.add.at(stiff, ends, np.repeat(mat_f[m, MF_EA] / l0, 2))
+    np.add.at(weight, ends, np.repeat(0.5 * l0 * np.maximum(mat_f[m, MF_SUBMERGED], 0.0) * g, 2))
+    np.add.at(contact, ends, np.repeat(0.5 * l0 * mat_f[m, MF_D], 2))
+    np.add.at(drag, ends, np.repeat(rho * mat_f[m, MF_CDN] * mat_f[m, MF_D] * 0.5 * l0 * REFERENCE_SPEED_M_S, 2))
     for n in np.nonzero(welded)[0]:
         mass[owner[n]] += mass[n]
         mass[n] = 0.0
