@@ -37,13 +37,15 @@ from moor_env.physics.layout import (
     CS_FRONT,
     CS_RADIUS,
     EF_DEPTH,
-    EF_G,
     EF_SPEED_LIMIT,
     NI_KIND,
     NODE_FREE,
 )
 
 DEPTH_TOLERANCE_M = 1e-6  # a node must miss its predicted set by this much before the step is solved again
+# a node this close to the anchor counts as resting on it: its velocity changes as in the last step (h^2 a off a
+# surface accelerating at a: 0.7 mm at 5.7 m/s^2 and 11.25 ms; 2 mm covers 15 m/s^2)
+RESTING_GAP_M = 2e-3
 
 
 @jit_step
@@ -63,18 +65,20 @@ def init_contact_set(h, model, state):
     step (the broad phase: one distance per node and step; the solves test the candidates only). Every candidate
     inside the anchor is in the contact set (``SET_IN``), and every one that reaches it within the step joins it
     (``SET_COMING``), so that a node landing on the anchor needs no second solve: reaches it at its present
-    velocity and falling under its weight (h g more; relative to the anchor's point at its present velocity, as
-    the solve's law takes it). Why the weight: a chain resting on the back end of the accelerating anchor starts
-    each step a fraction of a millimetre off it (the law holds the anchor's point at its start velocity), and its
-    weight brings it back within the step. Why no more than the weight: a joining node carries the linear law
-    from its gap, which pulls it in; predicted from its whole explicit load (the stiff pull of its segments), nodes
-    far from the anchor joined, were pulled in and blew the step up."""
+    velocity, changed as in the last step (``node_acc``, the last step's dv / h) where it lies within
+    ``RESTING_GAP_M`` of the anchor, relative to the anchor's point at its present velocity, as the solve's law
+    takes it. Why the last step's change: a chain resting on the back end
+    of the accelerating anchor starts each step a fraction of a millimetre off it (the law holds the anchor's point
+    at its start velocity) and falls back on it as it did in the last step. Why not a prediction from the node's
+    loads, nor from the last step farther out: a joining node carries the linear law from its gap, which pulls it
+    in; from its whole explicit load (the stiff pull of its segments), from its weight over the long steps before
+    the release, or from the last step's change at any gap, nodes far from the anchor joined and were pulled in
+    (env episodes blew up or took fifty times longer)."""
     contact_set = state.contact_set
     node_i = state.node_i
     p = state.node_pos
     v = state.node_vel
     body_state = state.body_state
-    g = model.env_f[EF_G]
     # the broad phase: in a step the integrator accepts neither the node nor the COG moves faster than the speed
     # limit (beyond it the step fails), so a node farther than 2 h v_limit outside the sphere cannot reach it
     body_m = bounding_radius_m(model.contact_shape)
@@ -101,12 +105,17 @@ def init_contact_set(h, model, state):
                 mode = SET_IN
         if mode == SET_OUT:
             wx, wy, wz = relative_velocity(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2], body_state)
-            fall = h * g  # the velocity its weight gives it over the step (buoyancy left out: an upper bound)
-            reach = h * math.sqrt(wx * wx + wy * wy + (wz - fall) ** 2)
+            # its velocity changed as in the last step (``node_acc``: the last step's dv / h)
+            dx = h * state.node_acc[n, 0]
+            dy = h * state.node_acc[n, 1]
+            dz = h * state.node_acc[n, 2]
+            reach = h * math.sqrt((wx + dx) ** 2 + (wy + dy) ** 2 + (wz + dz) ** 2)
             if within_reach(p[n, 0], p[n, 1], p[n, 2], body_state, model.contact_shape, reach):
                 sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(p[n, 0], p[n, 1], p[n, 2], body_state,
                                                                        model.contact_shape)
-                if predicted_depth(h, -sd, nx, ny, nz, wx, wy, wz, 0.0, 0.0, -fall) > DEPTH_TOLERANCE_M:
+                if sd > RESTING_GAP_M:  # not resting: its present velocity alone
+                    dx = dy = dz = 0.0
+                if predicted_depth(h, -sd, nx, ny, nz, wx, wy, wz, dx, dy, dz) > DEPTH_TOLERANCE_M:
                     mode = SET_COMING
         contact_set[k] = (n << SET_BITS) | mode
         k += 1
