@@ -43,7 +43,7 @@ from moor_env.physics.layout import (
 )
 
 DEPTH_TOLERANCE_M = 1e-6  # a node must miss its predicted set by this much before the step is solved again
-# a node this close to the anchor counts as resting on it: its velocity changes as in the last step (h^2 a off a
+# a node this close to the anchor counts as resting on it, its explicit load counted in its landing (h^2 a off a
 # surface accelerating at a: 0.7 mm at 5.7 m/s^2 and 11.25 ms; 2 mm covers 15 m/s^2)
 RESTING_GAP_M = 2e-3
 
@@ -65,15 +65,13 @@ def init_contact_set(h, model, state):
     step (the broad phase: one distance per node and step; the solves test the candidates only). Every candidate
     inside the anchor is in the contact set (``SET_IN``), and every one that reaches it within the step joins it
     (``SET_COMING``), so that a node landing on the anchor needs no second solve: reaches it at its present
-    velocity, changed as in the last step (``node_acc``, the last step's dv / h) where it lies within
-    ``RESTING_GAP_M`` of the anchor, relative to the anchor's point at its present velocity, as the solve's law
-    takes it. Why the last step's change: a chain resting on the back end
-    of the accelerating anchor starts each step a fraction of a millimetre off it (the law holds the anchor's point
-    at its start velocity) and falls back on it as it did in the last step. Why not a prediction from the node's
-    loads, nor from the last step farther out: a joining node carries the linear law from its gap, which pulls it
-    in; from its whole explicit load (the stiff pull of its segments), from its weight over the long steps before
-    the release, or from the last step's change at any gap, nodes far from the anchor joined and were pulled in
-    (env episodes blew up or took fifty times longer)."""
+    velocity, relative to the anchor's point at its present velocity as the solve's law takes it, changed where it
+    lies within ``RESTING_GAP_M`` of the anchor by its explicit load over the step, h F / m (its loads at the
+    start of the step, without a contact force: it is outside; its added mass left out). Why: a chain
+    resting on the back end of the accelerating anchor starts each step a fraction of a millimetre off it (the law
+    holds the anchor's point at its start velocity) and falls back on it within the step. Why only that close: a
+    joining node carries the linear law from its gap, which pulls it in, so a prediction that reaches farther would
+    pull in nodes that do not land."""
     contact_set = state.contact_set
     node_i = state.node_i
     p = state.node_pos
@@ -105,10 +103,12 @@ def init_contact_set(h, model, state):
                 mode = SET_IN
         if mode == SET_OUT:
             wx, wy, wz = relative_velocity(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2], body_state)
-            # its velocity changed as in the last step (``node_acc``: the last step's dv / h)
-            dx = h * state.node_acc[n, 0]
-            dy = h * state.node_acc[n, 1]
-            dz = h * state.node_acc[n, 2]
+            # its velocity changed by its explicit load over the step (outside, no contact force in it), counted
+            # only where it rests (below)
+            inv_m = h / max(state.node_mass[n], 1e-12)
+            dx = inv_m * state.node_force[n, 0]
+            dy = inv_m * state.node_force[n, 1]
+            dz = inv_m * state.node_force[n, 2]
             reach = h * math.sqrt((wx + dx) ** 2 + (wy + dy) ** 2 + (wz + dz) ** 2)
             if within_reach(p[n, 0], p[n, 1], p[n, 2], body_state, model.contact_shape, reach):
                 sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(p[n, 0], p[n, 1], p[n, 2], body_state,

@@ -5,7 +5,7 @@ mooring line runs from it to the second vessel, and the wire holds it from the i
 horizontal position follows from the balance of the wire and the mooring line (each a catenary with the same
 horizontal force), its height from the drop height (anchor tip ``drop_height_m`` above the seabed); the wire's
 unstretched length is set so that it reaches there. The fixed-point rounds of this balance run in one kernel
-(:func:`balance_rounds`, each a Newton solve of the suspended mooring line in ``catenary_kernels.hang_line``).
+(:func:`balance_rounds`: each round hangs the mooring line with ``catenary_kernels.hang_line`` and walks the wire).
 Current is left to the Newton solve.
 
 Scenes with no equilibrium are refused here, before any Newton iteration (:class:`moor_env.errors.NoEquilibrium`):

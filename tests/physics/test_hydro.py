@@ -7,14 +7,16 @@ import pytest
 
 from moor_env.physics.hydro import slender_drag, slender_drag_turn
 
+Q = np.array([0.3, -0.5, 0.81]) / np.linalg.norm([0.3, -0.5, 0.81])
 
-@pytest.mark.parametrize("vr", [(0.6, -0.2, 0.05), (0.0, 0.0, 0.3), (0.4, 0.0, 0.0)])
+
+@pytest.mark.parametrize("vr", [(0.6, -0.2, 0.05), (0.0, 0.0, 0.3), tuple(0.4 * Q),
+                                tuple(0.5 * np.cross(Q, [1.0, 0.0, 0.0]))])
 def test_drag_turn_matches_finite_differences(vr):
     """(d f / d q) P of a segment turning: the drag at q turned by a small angle in each direction across it
-    (q + eps P e_j, normalised) against the closed form, within 1e-6 of the drag's scale, both for a current across
-    the segment, along it and at an angle."""
-    q = np.array([0.3, -0.5, 0.81])
-    q /= np.linalg.norm(q)
+    (q + eps P e_j, normalised) against the closed form, within 1e-6 of the drag's scale, for currents at two
+    angles to the segment, along it (no normal component) and across it (no tangential one)."""
+    q = Q.copy()
     cn, ct = 120.0, 4.0
     out = np.zeros((3, 3))
     slender_drag_turn(*vr, *q, cn, ct, out)
