@@ -70,11 +70,7 @@ def solves_per_step(sim, saved) -> dict:
     sim.release()
     solves = contact_solves = steps = 0
     while True:
-        # the step's contact set reads node_acc (the last step's dv / h within a fall); evaluating the loads and
-        # the replay's own solves overwrite it, so it is put back for the replay and for the step
-        last_acc = sim.work.node_acc.copy()
         sim.evaluate_loads()
-        sim.work.node_acc[:] = last_acc
         model, state = sim.records()
         body_node = int(np.flatnonzero(state.node_i[:, L.NI_KIND] == L.NODE_BODY)[0])
         tree, orow = state.pos0.view(np.int64), state.vel0.view(np.int64)
@@ -96,7 +92,6 @@ def solves_per_step(sim, saved) -> dict:
             if changed + changed_contact == 0:
                 break
         steps += 1
-        sim.work.node_acc[:] = last_acc
         status, _ = sim.advance_to(sim.state.t + sim.dt, detect_touchdown=True)
         if status == L.STATUS_TOUCHDOWN:
             break
