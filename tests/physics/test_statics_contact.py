@@ -71,7 +71,7 @@ def test_newton_step_predicts_the_residual_change():
     they are) changes every line node's residual as predicted, F(x + eps dx) = (1 - eps) F(x), within 2 % of the
     change (the turning of the normal and the moment arm's change, left out of the system, are below that)."""
     from moor_env.physics import statics_system as system
-    from moor_env.physics.statics_contact import add_contact_blocks, contact_geometry
+    from moor_env.physics.statics_contact import add_contact_blocks, contact_geometry, slide_plan
     from moor_env.physics.statics_newton import _apply
     from moor_env.physics.statics_stages import body_root, slack_counts
     from moor_env.physics.tree import build_tree, order
@@ -112,9 +112,51 @@ def test_newton_step_predicts_the_residual_change():
                      cmat, coupled, body_a, body_r)
     assert np.abs(f0[contact_node - int(np.count_nonzero(~free[:contact_node]))]).max() > 1e5  # the push loads it
     eps = 1e-3
-    _apply(eps, nq, body, basis, dq, state, np.zeros(3), state.node_pos.copy(), tree, orow)
+    plan = np.zeros((nn, 2))
+    planned = slide_plan(basis, model, state, dq, *system.new_scratch(nn, 0)[4:7], plan)
+    _apply(eps, nq, body, basis, dq, model, state, np.zeros(3), state.node_pos.copy(), tree, orow, plan, planned)
     change = line_loads() - f0
     assert np.linalg.norm(change + eps * f0) < 0.02 * eps * np.linalg.norm(f0)
+
+
+@pytest.mark.parametrize("slide", [True, False])
+def test_a_step_slides_a_resting_node_along_the_shaft(slide):
+    """A Newton step that moves the resting node 5 mm round the shaft (radius rho 0.6 m) keeps it at its depth
+    (the linear model's prediction: no change along the normal) within 1e-9 m when it is placed on the surface
+    (``statics_contact.slide_on_surface``); moved along the tangent instead it would leave the surface by
+    s^2 / (2 rho) = 21 um, more than its resting depth, and lose its contact force."""
+    from moor_env.physics.anchor_surface import surface_distance
+    from moor_env.physics.statics_contact import N_GEO, slide_plan
+    from moor_env.physics.statics_newton import _apply
+    from moor_env.physics.statics_stages import body_root
+    from moor_env.physics.tree import build_tree, order
+
+    sim = solve_statics(load_scene("gjoa-500", RESTING[0]), progress=False, method="newton").simulator
+    model, state = sim.records()
+    body = body_root(sim)
+    nn = state.node_pos.shape[0]
+    node = int(np.argmax([anchor_intrusion_depth(sim, n) for n in range(nn)]))
+    depth0 = anchor_intrusion_depth(sim, node)
+    bs = state.body_state
+    normal = np.array(surface_distance(*state.node_pos[node], bs, model.contact_shape)[1:4])
+    tangent = np.cross(bs[L.BS_AXIS:L.BS_AXIS + 3], normal)
+    tree, orow = state.pos0.view(np.int64), state.vel0.view(np.int64)
+    build_tree(body, state.node_i, state.seg_i, tree, orow)
+    nq = order(body, state.node_i, state.seg_i, tree, orow)
+    basis, dq = np.zeros((2, 3)), np.zeros(5)
+    state.node_acc[:] = 0.0
+    state.node_acc[node] = 5e-3 * tangent / np.linalg.norm(tangent)
+    plan = np.zeros((nn, 2))
+    planned = slide_plan(basis, model, state, dq, np.zeros((nn, N_GEO)), np.zeros(nn, np.int64),
+                         np.zeros(nn, np.int64), plan)
+    assert planned >= 1 and plan[node, 0] == depth0 and abs(plan[node, 1]) < 1e-12
+    _apply(1.0, nq, body, basis, dq, model, state, np.zeros(3), state.node_pos.copy(), tree, orow, plan,
+           planned if slide else 0)
+    depth = -surface_distance(*state.node_pos[node], bs, model.contact_shape)[0]
+    if slide:
+        assert depth == pytest.approx(depth0, abs=1e-9)
+    else:
+        assert depth < depth0 - 1.5e-5
 
 
 def anchor_intrusion_depth(sim, node: int) -> float:
