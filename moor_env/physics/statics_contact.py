@@ -26,8 +26,7 @@ present depth d < 0); a node inside now and predicted outside lets go.
 
 A step moves a node resting on the shaft round it; the Newton kernel then puts the node on the surface at its
 linearly predicted depth (:func:`slide_plan`, :func:`slide_on_surface`) instead of along the tangent, which the
-penalty would punish as a lost contact force k s^2 / (2 rho). On the contact scenes of the statics benchmark this
-cut the iterations by a fifth and the slowest solves by half.
+penalty would punish as a lost contact force k s^2 / (2 rho).
 """
 
 from __future__ import annotations
