@@ -97,7 +97,8 @@ def run_scene(overrides: dict) -> dict:
         result = solve_statics(model, progress=False, method="newton")
         record.update(outcome="converged", iterations=result.iterations, release_point_m=result.release_point_m,
                       top_tensions_n=result.top_tensions_n,
-                      nodes_on_anchor=int(result.simulator.work.contact_out[L.CO_NODES]))
+                      nodes_on_anchor=int(result.simulator.work.contact_out[L.CO_NODES]),
+                      segment_depth_m=result.simulator.deepest_segment_inside_m())
     except NoEquilibrium as exc:
         record.update(outcome="no equilibrium", cause=exc.cause)
     except (StaticsNotConverged, SimulationDiverged) as exc:
@@ -191,7 +192,18 @@ def summarize(records: list[dict]) -> dict:
             causes[key] = causes.get(key, 0) + 1
     out["causes"] = causes
     out["reference"] = _compare(records)
+    out["resting_segments"] = _resting_segments(records)
     return out
+
+
+def _resting_segments(records: list[dict]) -> dict:
+    """How deep the lines resting on the anchor lie inside it, segment interiors included."""
+    depth = np.array([r["segment_depth_m"] for r in records
+                      if r["outcome"] == "converged" and r.get("nodes_on_anchor", 0) > 0 and "segment_depth_m" in r])
+    if depth.size == 0:
+        return {"scenes": 0}
+    return {"scenes": int(depth.size), "max_m": float(depth.max()), "median_m": float(np.median(depth)),
+            "deeper_than_5cm": int(np.sum(depth > 0.05))}
 
 
 def _quantiles(ms: np.ndarray) -> dict:
@@ -264,6 +276,12 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
                 f"{ref['top_tension_max_rel'] * 100:.2g} %; it took {ref['reference_solve_median_s']:.2g} s per scene "
                 f"(median), {ref['speedup_median']:.0f}x the Newton solver's time (least {ref['speedup_min']:.0f}x)."
                 if ref.get("scenes") else "No relaxation-solver comparison in this run.")
+    seg = s.get("resting_segments", {})
+    seg_text = (f"Resting on the anchor, the contact holds the nodes within a millimetre of its surface, but a "
+                f"segment between two nodes can cut across an edge of the anchor: over the {seg['scenes']} scenes "
+                f"resting on it the deepest point of a segment lies {seg['median_m'] * 1e3:.0f} mm inside (median), "
+                f"{seg['max_m'] * 1e3:.0f} mm at most, more than 5 cm in {seg['deeper_than_5cm']}."
+                if seg.get("scenes") else "")
     fb = s["fallback"]
     cpu_timed = any("solve_wall_s" in r for r in result["records"])
     limit = result.get("fallback_limit_s", math.nan)
@@ -289,7 +307,7 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
                if mp.get("scenes") else "No MoorPy comparison in this run.")
     line = run_line(result, COMMAND) + (CLOCK_TEXT if cpu_timed else "")
     doc = (f"{main}\n\nScenes refused or not solved by Newton's method, by cause:\n\n{causes}\n\n{fb_text}\n\n"
-           f"{cmp_text}\n\n{mp_text}\n\n{line}")
+           f"{cmp_text}\n\n{mp_text}\n\n" + (f"{seg_text}\n\n" if seg_text else "") + line)
     a = s["all"]
     cpu = " of CPU time" if cpu_timed else ""
     readme = (f"Hanging equilibrium by Newton's method in {a['solve_ms']['median']:.1f} ms median, "

@@ -15,7 +15,7 @@ from moor_env.config import SceneConfig
 from moor_env.errors import SimulationDiverged
 from moor_env.physics import layout as L
 from moor_env.physics.anchor import tilt_deg
-from moor_env.physics.anchor_surface import length_on_surface
+from moor_env.physics.anchor_surface import deepest_segment_point, length_on_surface
 from moor_env.physics.integrate import (
     FAIL_BODY,
     FAIL_NODE,
@@ -278,6 +278,16 @@ class Simulator:
         return float(length_on_surface(st.node_pos, st.seg_i, st.seg_f, st.line_i[idx, L.LI_SEG_START],
                                        st.line_i[idx, L.LI_NSEG], st.body_state, self.model.contact_shape,
                                        tolerance_m))
+
+    def deepest_segment_inside_m(self) -> float:
+        """How deep the deepest point of any line lies inside the anchor's surface now, segment interiors included
+        [m] (0 where none does, or without an anchor): the contact acts on nodes, and a segment between two nodes
+        outside the surface can still cut across an edge of the anchor
+        (:func:`moor_env.physics.anchor_surface.deepest_segment_point`)."""
+        if not self.model.body_active:
+            return 0.0
+        st = self.state
+        return float(deepest_segment_point(st.node_pos, st.seg_i, st.body_state, self.model.contact_shape)[0])
 
     def contact_report(self) -> dict[str, float]:
         """What the line-anchor contact did since the release: its peak net force on the anchor [N] and the deepest

@@ -28,6 +28,7 @@ from moor_env.physics.layout import (
     CS_RADIUS,
     SF_L0,
     SI_A,
+    SI_ACTIVE,
     SI_B,
 )
 
@@ -196,3 +197,84 @@ def length_on_surface(node_pos, seg_i, seg_f, first_seg, n_segs, body_state, sha
         if da <= tolerance_m and db <= tolerance_m:
             total += seg_f[s, SF_L0]
     return total
+
+
+SEGMENT_SAMPLES = 16  # points of a segment sampled for its deepest one inside the anchor
+GOLDEN_STEPS = 24  # golden-section steps that refine it (the bracket shrinks to 1e-5 of a sample interval)
+
+
+@jit
+def _depth_along(ax, ay, az, bx, by, bz, t, body_state, shape):
+    """Depth [m] of the point a + t (b - a) inside the anchor's surface (negative: outside)."""
+    return -surface_distance(ax + t * (bx - ax), ay + t * (by - ay), az + t * (bz - az), body_state, shape)[0]
+
+
+@jit
+def segment_depth(ax, ay, az, bx, by, bz, body_state, shape):
+    """The deepest point of the straight segment from a to b inside the anchor's surface: (depth [m], t), the point
+    at a + t (b - a); the depth is negative where the whole segment stays outside.
+
+    The segment is sampled at ``SEGMENT_SAMPLES`` + 1 points, and the deepest is refined by golden-section search
+    between its neighbours: exact where the segment crosses one cylinder (the depth along a straight line through
+    a convex body is concave), the deepest of the sampled ones elsewhere.
+    """
+    best_t = 0.0
+    best = -math.inf
+    for i in range(SEGMENT_SAMPLES + 1):
+        t = i / SEGMENT_SAMPLES
+        d = _depth_along(ax, ay, az, bx, by, bz, t, body_state, shape)
+        if d > best:
+            best = d
+            best_t = t
+    lo = max(0.0, best_t - 1.0 / SEGMENT_SAMPLES)
+    hi = min(1.0, best_t + 1.0 / SEGMENT_SAMPLES)
+    ratio = 0.5 * (math.sqrt(5.0) - 1.0)
+    t1 = hi - ratio * (hi - lo)
+    t2 = lo + ratio * (hi - lo)
+    d1 = _depth_along(ax, ay, az, bx, by, bz, t1, body_state, shape)
+    d2 = _depth_along(ax, ay, az, bx, by, bz, t2, body_state, shape)
+    for _ in range(GOLDEN_STEPS):
+        if d1 >= d2:
+            hi = t2
+            t2 = t1
+            d2 = d1
+            t1 = hi - ratio * (hi - lo)
+            d1 = _depth_along(ax, ay, az, bx, by, bz, t1, body_state, shape)
+        else:
+            lo = t1
+            t1 = t2
+            d1 = d2
+            t2 = lo + ratio * (hi - lo)
+            d2 = _depth_along(ax, ay, az, bx, by, bz, t2, body_state, shape)
+    if d1 > best:
+        best = d1
+        best_t = t1
+    if d2 > best:
+        best = d2
+        best_t = t2
+    return best, best_t
+
+
+@jit
+def deepest_segment_point(node_pos, seg_i, body_state, shape):
+    """How deep the deepest point of any active segment, its interior included, lies inside the anchor's surface
+    [m] (0 where none does), and that segment's index (-1 where none)."""
+    deepest = 0.0
+    which = -1
+    for s in range(seg_i.shape[0]):
+        if seg_i[s, SI_ACTIVE] == 0:
+            continue
+        a = seg_i[s, SI_A]
+        b = seg_i[s, SI_B]
+        dx = node_pos[b, 0] - node_pos[a, 0]
+        dy = node_pos[b, 1] - node_pos[a, 1]
+        dz = node_pos[b, 2] - node_pos[a, 2]
+        reach = math.sqrt(dx * dx + dy * dy + dz * dz)  # a segment that meets the anchor has both ends this close
+        if not within_reach(node_pos[a, 0], node_pos[a, 1], node_pos[a, 2], body_state, shape, reach):
+            continue
+        d, _ = segment_depth(node_pos[a, 0], node_pos[a, 1], node_pos[a, 2], node_pos[b, 0], node_pos[b, 1],
+                             node_pos[b, 2], body_state, shape)
+        if d > deepest:
+            deepest = d
+            which = s
+    return deepest, which

@@ -93,38 +93,33 @@ def _apply(scale, nq, body_node, basis, dq, model, state, axis0, saved, tree, or
             node_pos[body_node, c] = body_state[L.BS_POS + c] + sp * body_state[L.BS_AXIS + c]
     for k in range(nq - 1, -1, -1):
         c = orow[k, OR_ORDER]
-        if tree[c, TR_DEG] != -1:
+        linear = tree[c, TR_DEG] != -1
+        if not linear:
+            p = tree[c, TR_NB]
+            old_len = math.sqrt((saved[c, 0] - saved[p, 0]) ** 2 + (saved[c, 1] - saved[p, 1]) ** 2
+                                + (saved[c, 2] - saved[p, 2]) ** 2)
+            # predicted relative vector and length of the segment (linear in the step, parent's linear motion)
+            vx = saved[c, 0] - saved[p, 0] + scale * (node_acc[c, 0] - node_acc[p, 0])
+            vy = saved[c, 1] - saved[p, 1] + scale * (node_acc[c, 1] - node_acc[p, 1])
+            vz = saved[c, 2] - saved[p, 2] + scale * (node_acc[c, 2] - node_acc[p, 2])
+            new_len = math.sqrt(vx * vx + vy * vy + vz * vz)
+            target = old_len
+            if old_len > 0.0:
+                target += scale * ((saved[c, 0] - saved[p, 0]) * (node_acc[c, 0] - node_acc[p, 0])
+                                   + (saved[c, 1] - saved[p, 1]) * (node_acc[c, 1] - node_acc[p, 1])
+                                   + (saved[c, 2] - saved[p, 2]) * (node_acc[c, 2] - node_acc[p, 2])) / old_len
+            if new_len <= 0.0 or target <= 0.0:
+                linear = True
+            else:
+                f = target / new_len
+                node_pos[c, 0] = node_pos[p, 0] + vx * f
+                node_pos[c, 1] = node_pos[p, 1] + vy * f
+                node_pos[c, 2] = node_pos[p, 2] + vz * f
+        if linear:
             for i in range(3):
                 node_pos[c, i] += scale * node_acc[c, i]
-        else:
-            _place(scale, c, tree[c, TR_NB], node_pos, node_acc, saved)
         if planned > 0 and plan[c, 0] == plan[c, 0]:
             slide_on_surface(node_pos, c, body_state, model.contact_shape, plan[c, 0] + scale * plan[c, 1])
-
-
-@jit_step
-def _place(scale, c, p, node_pos, node_acc, saved):
-    """Node c from its placed parent p along the segment's new direction at its linearly predicted length."""
-    old_len = math.sqrt((saved[c, 0] - saved[p, 0]) ** 2 + (saved[c, 1] - saved[p, 1]) ** 2
-                        + (saved[c, 2] - saved[p, 2]) ** 2)
-    # predicted relative vector and length of the segment (linear in the step, parent's linear motion)
-    vx = saved[c, 0] - saved[p, 0] + scale * (node_acc[c, 0] - node_acc[p, 0])
-    vy = saved[c, 1] - saved[p, 1] + scale * (node_acc[c, 1] - node_acc[p, 1])
-    vz = saved[c, 2] - saved[p, 2] + scale * (node_acc[c, 2] - node_acc[p, 2])
-    new_len = math.sqrt(vx * vx + vy * vy + vz * vz)
-    target = old_len
-    if old_len > 0.0:
-        target += scale * ((saved[c, 0] - saved[p, 0]) * (node_acc[c, 0] - node_acc[p, 0])
-                           + (saved[c, 1] - saved[p, 1]) * (node_acc[c, 1] - node_acc[p, 1])
-                           + (saved[c, 2] - saved[p, 2]) * (node_acc[c, 2] - node_acc[p, 2])) / old_len
-    if new_len <= 0.0 or target <= 0.0:
-        for i in range(3):
-            node_pos[c, i] += scale * node_acc[c, i]
-        return
-    f = target / new_len
-    node_pos[c, 0] = node_pos[p, 0] + vx * f
-    node_pos[c, 1] = node_pos[p, 1] + vy * f
-    node_pos[c, 2] = node_pos[p, 2] + vz * f
 
 
 @jit_step
@@ -211,7 +206,9 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
         saved_body[:] = body_state
         saved_step[:, :] = node_acc
         saved_dq[:] = dq
-        planned = slide_plan(basis, model, state, dq, plan_geo, plan_cand, plan_cin, plan) if contact else 0
+        # a node to slide is one the step's solve predicted inside the anchor (its contact set, scratch[6])
+        planned = slide_plan(basis, model, state, dq, plan_geo, plan_cand, plan_cin, plan) if (
+            contact and scratch[6].any()) else 0
         _apply(scale, nq, body_node, basis, dq, model, state, axis0, saved, tree, orow, plan, planned)
         new2, new_worst = residual(model, state, body_node, basis, res_body)
         new_size = math.inf

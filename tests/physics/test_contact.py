@@ -125,6 +125,35 @@ def test_signed_distance_on_a_stepped_body():
         assert S.surface_distance(*(x - sd * n), state, shape)[0] == pytest.approx(0.0, abs=1e-12)
 
 
+def test_segment_across_the_back_rim():
+    """Reference: a segment from 1 cm behind the back end face, 0.3 m in from its rim, to 1 cm beside the shaft,
+    0.95 m ahead of the back end: both nodes are outside, its interior cuts the rim. Inside the corner the depth is
+    min(R - rho, a - back), so along the chord the deepest point is where the two are equal (closed form, solved
+    for t). Tolerance 1e-6 m and 1e-4 in t; a segment that stays outside reports a negative depth; the sum over
+    the segments of a line finds it."""
+    state = body(axis=(0.0, 0.0, -1.0))
+    a0, rho0 = S_BACK_M - 0.01, RADIUS_M - 0.3
+    a1, rho1 = S_BACK_M + 0.95, RADIUS_M + 0.01
+    x0, x1 = point(state, a0, rho0, angle=0.0), point(state, a1, rho1, angle=0.0)
+    t_ref = ((RADIUS_M - rho0) - (a0 - S_BACK_M)) / ((a1 - a0) + (rho1 - rho0))
+    depth_ref = RADIUS_M - (rho0 + t_ref * (rho1 - rho0))
+    assert depth_ref > 0.2
+    assert S.surface_distance(*x0, state, SHAPE)[0] > 0.0 and S.surface_distance(*x1, state, SHAPE)[0] > 0.0
+    depth, t = S.segment_depth(*x0, *x1, state, SHAPE)
+    assert depth == pytest.approx(depth_ref, abs=1e-6) and t == pytest.approx(t_ref, abs=1e-4)
+    outside = S.segment_depth(*x1, *point(state, a1 + 1.0, rho1, angle=0.0), state, SHAPE)[0]
+    assert outside == pytest.approx(-0.01, abs=1e-6)
+    node_pos = np.array([x0, x1, point(state, a1 + 1.0, rho1, angle=0.0)])
+    seg_i = np.zeros((2, L.N_SEG_I), np.int64)
+    seg_i[:, L.SI_A] = [0, 1]
+    seg_i[:, L.SI_B] = [1, 2]
+    seg_i[:, L.SI_ACTIVE] = 1
+    deepest, which = S.deepest_segment_point(node_pos, seg_i, state, SHAPE)
+    assert which == 0 and deepest == pytest.approx(depth_ref, abs=1e-6)
+    seg_i[0, L.SI_ACTIVE] = 0
+    assert S.deepest_segment_point(node_pos, seg_i, state, SHAPE) == (0.0, -1)
+
+
 def test_normal_derivative_matches_finite_differences():
     """Reference: the Hessian of the signed distance (dn/dx) against central differences of the normal (step
     1e-6 m) on the shaft, outside the rim and on a face; 1e-6 relative to the largest entry (1 / radius)."""
