@@ -42,11 +42,13 @@ class SegmentDepth(gym.Wrapper):
     every step (``segment_depth_m``)."""
 
     def reset(self, **kwargs):
+        """Reset and measure the equilibrium."""
         out = self.env.reset(**kwargs)
         self.segment_depth_m = self.unwrapped.core.sim.deepest_segment_inside_m()
         return out
 
     def step(self, action):
+        """Step and keep the deeper of the last and the present state."""
         out = self.env.step(action)
         self.segment_depth_m = max(self.segment_depth_m, self.unwrapped.core.sim.deepest_segment_inside_m())
         return out
@@ -70,7 +72,7 @@ def docs_blocks(out: dict) -> list[tuple[Path, str, str]]:
         ["episodes", "touched down", "contact on", "deepest node inside the anchor in the fall, max / p99 [mm]",
          f"episodes deeper than {1e3 * LIMIT_M:.0f} mm",
          "deepest segment point inside, at rest, pre-release and at touchdown, max / p99 [mm]",
-         f"episodes deeper than {1e3 * LIMIT_M:.0f} mm", "chain past the back end, max [m]"],
+         f"episodes with a segment deeper than {1e3 * LIMIT_M:.0f} mm", "chain past the back end, max [m]"],
         [[s["episodes"], s["touchdowns"], s["contact_on"],
           f"{1e3 * s['depth_max_m']:.1f} / {1e3 * s['depth_p99_m']:.1f}", s["deeper_than_limit"],
           f"{1e3 * s['segment_depth_max_m']:.1f} / {1e3 * s['segment_depth_p99_m']:.1f}",

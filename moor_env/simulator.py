@@ -281,7 +281,8 @@ class Simulator:
 
     def deepest_segment_inside_m(self) -> float:
         """How deep the deepest point of any line lies inside the anchor's surface now, segment interiors included
-        [m] (0 where none does, or without an anchor): the contact acts on nodes, and a segment between two nodes
+        [m] (0 where none does, without an anchor, or where the scene does not model the contact, whose surface
+        it measures): the contact acts on nodes, and a segment between two nodes
         outside the surface can still cut across an edge of the anchor
         (:func:`moor_env.physics.anchor_surface.deepest_segment_point`)."""
         if not self.model.body_active:

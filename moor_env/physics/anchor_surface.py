@@ -200,7 +200,8 @@ def length_on_surface(node_pos, seg_i, seg_f, first_seg, n_segs, body_state, sha
 
 
 SEGMENT_SAMPLES = 16  # points of a segment sampled for its deepest one inside the anchor
-GOLDEN_STEPS = 24  # golden-section steps that refine it (the bracket shrinks to 1e-5 of a sample interval)
+GOLDEN_STEPS = 24  # golden-section steps that refine it (the bracket shrinks to 1e-5 of its initial width)
+INSIDE_TOLERANCE_M = 1e-9  # deeper than this counts as inside (a line's end on the surface rounds either way)
 
 
 @jit
@@ -258,7 +259,7 @@ def segment_depth(ax, ay, az, bx, by, bz, body_state, shape):
 @jit
 def deepest_segment_point(node_pos, seg_i, body_state, shape):
     """How deep the deepest point of any active segment, its interior included, lies inside the anchor's surface
-    [m] (0 where none does), and that segment's index (-1 where none)."""
+    [m] (0 where none lies more than ``INSIDE_TOLERANCE_M`` inside), and that segment's index (-1 where none)."""
     deepest = 0.0
     which = -1
     for s in range(seg_i.shape[0]):
@@ -274,7 +275,7 @@ def deepest_segment_point(node_pos, seg_i, body_state, shape):
             continue
         d, _ = segment_depth(node_pos[a, 0], node_pos[a, 1], node_pos[a, 2], node_pos[b, 0], node_pos[b, 1],
                              node_pos[b, 2], body_state, shape)
-        if d > deepest:
+        if d > deepest and d > INSIDE_TOLERANCE_M:
             deepest = d
             which = s
     return deepest, which

@@ -240,7 +240,8 @@ def slide_plan(basis, model, state, dq, geo, cand, cin, plan):
 
 @jit_step
 def slide_on_surface(node_pos, n, body_state, shape, depth_m):
-    """Move node n along the anchor's normal to the depth ``depth_m`` [m] (the anchor at its new place).
+    """Move node n along the anchor's normal to the depth ``depth_m`` [m] (the anchor at its new place), where it
+    still lies nearest the shaft.
 
     Why: a step slides a resting node along the surface, but its linear model moves it along the tangent, which
     leaves a curved surface by s^2 / (2 rho) over a slide s; at the contact's stiffness that is a force of k s^2 /
@@ -248,8 +249,10 @@ def slide_on_surface(node_pos, n, body_state, shape, depth_m):
     would be refused and the solve crawl. Placed at its linearly predicted depth, the node keeps the linear
     model's normal force; a segment to it, near the tangent plane, changes length only by the square of the
     correction."""
-    sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(node_pos[n, 0], node_pos[n, 1], node_pos[n, 2],
-                                                           body_state, shape)
+    sd, nx, ny, nz, _, _, _, _, _, _, feature = surface_distance(node_pos[n, 0], node_pos[n, 1], node_pos[n, 2],
+                                                                 body_state, shape)
+    if feature != FEATURE_SHAFT:  # moved past an end of the shaft: the face or rim there is no slide's surface
+        return
     shift = sd + depth_m
     node_pos[n, 0] -= shift * nx
     node_pos[n, 1] -= shift * ny

@@ -184,6 +184,8 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
     status = STATUS_RUNNING
     norm2, worst = residual(model, state, body_node, basis, res_body)
     tau, size = _bounded_step(tau, ctl, nq, body_node, basis, res_body, dq, model, state, scratch, tree, orow, seg_age)
+    step_contact = contact and scratch[6].any()  # the step's solve predicted a node inside the anchor
+    saved_contact = step_contact
     cap = ctl[C_CAP] if ctl[C_CAP] > 0.0 else ctl[C_MAX_STEP]
     cuts = int(ctl[C_CUTS])
     for _ in range(max_iter):
@@ -206,9 +208,9 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
         saved_body[:] = body_state
         saved_step[:, :] = node_acc
         saved_dq[:] = dq
-        # a node to slide is one the step's solve predicted inside the anchor (its contact set, scratch[6])
-        planned = slide_plan(basis, model, state, dq, plan_geo, plan_cand, plan_cin, plan) if (
-            contact and scratch[6].any()) else 0
+        # no node predicted inside the anchor by the step's solve: nothing to slide, no planning cost
+        planned = slide_plan(basis, model, state, dq, plan_geo, plan_cand, plan_cin, plan) if step_contact else 0
+        saved_contact = step_contact
         _apply(scale, nq, body_node, basis, dq, model, state, axis0, saved, tree, orow, plan, planned)
         new2, new_worst = residual(model, state, body_node, basis, res_body)
         new_size = math.inf
@@ -220,6 +222,7 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
         if (new_size <= shrink * size or (new2 <= shrink * shrink * norm2 and new_size <= GROWTH * size)
                 or new_size < ctl[C_STEP_TOL]):
             count_slack(state, seg_age)
+            step_contact = contact and scratch[6].any()
             cap = min(2.0 * max(cap, scale * size), ctl[C_MAX_STEP])
             norm2 = new2
             worst = new_worst
@@ -230,6 +233,7 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
                 if tau <= TAU_NEWTON_S:  # the step changes with tau: the next test compares steps of one tau
                     tau, size = _bounded_step(tau, ctl, nq, body_node, basis, res_body, dq, model, state, scratch,
                                               tree, orow, seg_age)
+                    step_contact = contact and scratch[6].any()
             else:
                 tau = new_tau
             continue
@@ -242,12 +246,14 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
         if cuts <= LINE_SEARCH_CUTS:
             node_acc[:, :] = saved_step
             dq[:] = saved_dq
+            step_contact = saved_contact
             cap = 0.3 * scale * size
         else:
             cuts = 0
             cap = ctl[C_MAX_STEP]
             tau, size = _bounded_step(0.1 * tau, ctl, nq, body_node, basis, res_body, dq, model, state, scratch,
                                               tree, orow, seg_age)
+            step_contact = contact and scratch[6].any()
     ctl[C_TAU] = tau
     ctl[C_CAP] = cap
     ctl[C_CUTS] = cuts

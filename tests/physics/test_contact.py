@@ -129,7 +129,7 @@ def test_segment_across_the_back_rim():
     """Reference: a segment from 1 cm behind the back end face, 0.3 m in from its rim, to 1 cm beside the shaft,
     0.95 m ahead of the back end: both nodes are outside, its interior cuts the rim. Inside the corner the depth is
     min(R - rho, a - back), so along the chord the deepest point is where the two are equal (closed form, solved
-    for t). Tolerance 1e-6 m and 1e-4 in t; a segment that stays outside reports a negative depth; the sum over
+    for t). Tolerance 1e-6 m and 1e-4 in t; a segment that stays outside reports a negative depth; the deepest over
     the segments of a line finds it."""
     state = body(axis=(0.0, 0.0, -1.0))
     a0, rho0 = S_BACK_M - 0.01, RADIUS_M - 0.3
