@@ -31,6 +31,7 @@ from moor_env.physics.layout import (
     SI_ACTIVE,
     SI_B,
 )
+from moor_env.physics.line import segment_axis
 
 FEATURE_SHAFT = 0
 FEATURE_FRONT = 1
@@ -267,10 +268,7 @@ def deepest_segment_point(node_pos, seg_i, body_state, shape):
             continue
         a = seg_i[s, SI_A]
         b = seg_i[s, SI_B]
-        dx = node_pos[b, 0] - node_pos[a, 0]
-        dy = node_pos[b, 1] - node_pos[a, 1]
-        dz = node_pos[b, 2] - node_pos[a, 2]
-        reach = math.sqrt(dx * dx + dy * dy + dz * dz)  # a segment that meets the anchor has both ends this close
+        reach = segment_axis(node_pos, a, b)[0]  # a segment that meets the anchor has both ends this close
         if not within_reach(node_pos[a, 0], node_pos[a, 1], node_pos[a, 2], body_state, shape, reach):
             continue
         d, _ = segment_depth(node_pos[a, 0], node_pos[a, 1], node_pos[a, 2], node_pos[b, 0], node_pos[b, 1],
