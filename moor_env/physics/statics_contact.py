@@ -245,10 +245,10 @@ def slide_on_surface(node_pos, n, body_state, shape, depth_m):
 
     Why: a step slides a resting node along the surface, but its linear model moves it along the tangent, which
     leaves a curved surface by s^2 / (2 rho) over a slide s; at the contact's stiffness that is a force of k s^2 /
-    (2 rho), 130 N for a 0.8 mm slide on a 0.6 m shaft, as large as the residual the step removes, so the step
-    would be refused and the solve crawl. Placed at its linearly predicted depth, the node keeps the linear
-    model's normal force; a segment to it, near the tangent plane, changes length only by the square of the
-    correction."""
+    (2 rho), 130 N for a 0.8 mm slide on a 0.6 m shaft at k = 2.5e8 N/m (the fast preset's chain), which can be as
+    large as the residual the step removes, so the step would be refused and the solve crawl. Placed at its
+    linearly predicted depth, the node keeps the linear model's normal force; a segment to it, near the tangent
+    plane, changes length only by the square of the correction."""
     sd, nx, ny, nz, _, _, _, _, _, _, feature = surface_distance(node_pos[n, 0], node_pos[n, 1], node_pos[n, 2],
                                                                  body_state, shape)
     if feature != FEATURE_SHAFT:  # moved past an end of the shaft: the face or rim there is no slide's surface
