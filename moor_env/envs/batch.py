@@ -27,11 +27,9 @@ observations normalised for all slots at once) the batched env's Python per slot
 than 68 us (calm default scene, 16 slots, one thread, profiler off).
 
 Why the single env goes through this kernel too (with one scene): LLVM optimises ``advance`` together with its
-caller (inlining, constant arguments), and with the kernels' fastmath ``contract`` flag the fused multiply-adds
-it chooses can depend on that context. Measured: the states after 10 s of waves and the fall were bit-identical
-between ``Simulator.advance_to`` and a loop kernel, but the interpolated touchdown record differed by 1 ulp.
-Sharing one compiled kernel (one specialisation, any number of scenes) makes row i of the batched env equal the
-single env bit for bit.
+caller (inlining, constant arguments), and under the kernels' fastmath flags (``physics/_jit.py``) how it rounds
+may depend on that context. Sharing one compiled kernel (one specialisation, any number of scenes) makes row i of
+the batched env equal the single env bit for bit.
 
 Why no ``prange``: numba's threading layer without TBB installed is GNU OpenMP, which is not fork-safe (an
 ``AsyncVectorEnv`` forked after a parallel region aborts), and numba's fork-safe ``workqueue`` layer is not

@@ -21,7 +21,7 @@ def _advance(sim, span_s: float = 0.2) -> None:
 
 
 def test_kernel_leaves_the_loads_of_the_state_reached(hanging_sim):
-    """Reference: ``evaluate_loads`` at the same state; tolerance 1e-12 relative (the kernel may contract
+    """Reference: ``evaluate_loads`` at the same state; tolerance 1e-12 relative (the kernel may round
     floating-point operations differently from the stand-alone compiled function)."""
     sim = hanging_sim
     _advance(sim)
@@ -103,7 +103,7 @@ def test_kernel_measures_equal_the_simulator_quantities(tiny):
     """The observation's measures from the kernel (``moor_env.envs.measures.measure_scene`` after an advance)
     against the same quantities from the Simulator's own methods and the physics functions, after a step in
     waves with spacing and winch moves. Reference: those functions; tolerance 1e-9 relative (the kernel may
-    contract floating-point operations differently)."""
+    round floating-point operations differently)."""
     import gymnasium as gym
 
     from moor_env.envs import measures as M
