@@ -25,7 +25,7 @@ import numpy as np
 
 from moor_env.compile import Model
 from moor_env.physics import layout as L
-from moor_env.simulation import SimState
+from moor_env.physics.records import SimState
 
 
 def remesh_state(state: SimState, source: Model, target: Model) -> SimState:

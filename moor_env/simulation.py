@@ -7,6 +7,7 @@ Last stage of ``YAML -> SceneConfig -> Model -> kernels -> results``: :func:`sol
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -17,13 +18,15 @@ from tqdm.auto import tqdm
 
 from moor_env.compile import VESSEL_SECOND, Model, compile_scene
 from moor_env.config import SceneConfig, load_scene
-from moor_env.errors import StaticsNotConverged
+from moor_env.errors import MoorEnvError, StaticsNotConverged
+from moor_env.fidelity import fidelity_presets
 from moor_env.physics import layout as L
 from moor_env.physics.anchor import tilt_deg
 from moor_env.physics.integrate import INTEGRATOR_IMPLICIT_EULER, INTEGRATOR_RK2, INTEGRATOR_SYMPLECTIC_EULER
 from moor_env.physics.records import STATE_NAMES, SimState
 from moor_env.physics.statics import solve_equilibrium
 from moor_env.physics.statics_guess import change_line_length, check_anchor_clearance, check_fibre_clearance
+from moor_env.remesh import remesh_state
 from moor_env.simulator import Simulator, integrator_code
 
 STATE_ARRAY_FIELDS = STATE_NAMES  # the arrays of a SimState, in order
@@ -60,6 +63,53 @@ def _adjust_to_drop_height(sim: Simulator, target_z: float) -> float:
     return float(tip[2] - target_z)
 
 
+COARSE_PRESET = "fast"  # the preset whose segment lengths the coarse start's compile takes
+
+
+def _equilibrium(sim: Simulator, progress: bool, method: str):
+    """:func:`solve_equilibrium` by ``method``; where Newton's method does not converge from the first guess, from
+    the equilibrium of a coarse compile of the scene (:func:`_from_coarse`) before the relaxation fallback."""
+    if method == "relaxation":
+        return solve_equilibrium(sim, progress=progress, method=method)
+    try:
+        return solve_equilibrium(sim, progress=progress, method="newton")
+    except StaticsNotConverged as exc:
+        report = _from_coarse(sim, progress)
+        if report is not None:
+            return report
+        if method == "newton" or exc.line_on_anchor:  # the relaxation leaves the line-anchor contact out
+            raise
+    sim.state = sim.model.initial_state()
+    return solve_equilibrium(sim, progress=progress, method="relaxation")
+
+
+def _from_coarse(sim: Simulator, progress: bool):
+    """Solve ``sim`` from the equilibrium of its scene compiled at the segment lengths of ``COARSE_PRESET``,
+    mapped onto its resolution (:func:`moor_env.remesh.remesh_state`); the report (iterations of both solves),
+    or None where that start is not to be had (lines no finer than the coarse ones, the coarse scene unsolved,
+    lines that do not map) or Newton's method does not converge from it.
+
+    Why: Newton's method from the first guess goes through the current's stages, and on a few scenes (most of
+    them with the loop resting against the anchor in current) it stalls on the fine lines where it converges on
+    the coarse ones. The coarse equilibrium mapped onto the fine lines is already in the scene's current and
+    contact; it differs from the fine equilibrium by the sag within each coarse segment. Why only after a
+    failure: on most scenes that start costs more than the first guess (its compile and solve, and tens of
+    Newton iterations for the sag)."""
+    model = sim.model
+    disc = model.scene.discretization
+    coarse_keys = {k: v for k, v in fidelity_presets()[COARSE_PRESET].items() if k.endswith("_segment_m")}
+    if all(getattr(disc, k) >= v for k, v in coarse_keys.items()):
+        return None
+    coarse_scene = model.scene.model_copy(update={"discretization": disc.model_copy(update=coarse_keys)})
+    try:
+        coarse = solve_statics(coarse_scene, progress=progress, method="newton")
+        sim.state = remesh_state(coarse.simulator.state, coarse.simulator.model, model)
+        report = solve_equilibrium(sim, warm=True, progress=progress, method="newton", mapped=True)
+    except (MoorEnvError, ValueError):
+        return None
+    return dataclasses.replace(report, iterations=report.iterations + coarse.iterations)
+
+
 def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: bool = True,
                   method: str = "auto") -> StaticResult:
     """Hanging equilibrium before release, drop height held at its set value (seed 003: Landhaug 2015, *Dynamic
@@ -79,7 +129,7 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: boo
     t0 = time.perf_counter()
     model = scene if isinstance(scene, Model) else compile_scene(scene)
     sim = Simulator(model)
-    report = solve_equilibrium(sim, progress=progress, method=method)
+    report = _equilibrium(sim, progress, method)
     iterations = report.iterations
     finished = report.method
     sc = model.scene

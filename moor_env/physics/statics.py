@@ -77,7 +77,7 @@ def n_static_dofs(sim) -> int:
 
 def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max_step_m: float = 20.0,
                       warm: bool = False, analytic_guess: bool = True, progress: bool = True,
-                      method: str = "auto") -> StaticsReport:
+                      method: str = "auto", mapped: bool = False) -> StaticsReport:
     """Drive the simulator's current state to static equilibrium in place.
 
     ``method``: "auto" runs :func:`solve_newton` and, where it does not converge, the slow, robust solver of
@@ -98,7 +98,7 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS
     if method != "relaxation":
         report = _by_newton(sim, start, method, {"tol_rel": tol_rel, "max_iter": max_iter, "max_step_m": max_step_m,
                                                  "warm": warm, "analytic_guess": analytic_guess,
-                                                 "progress": progress})
+                                                 "progress": progress, "mapped": mapped})
         if report is not None:
             return report
         restore_state(sim.state, start)
@@ -167,7 +167,7 @@ def _stop(st) -> None:
 
 def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max_step_m: float = 20.0,
                  warm: bool = False, analytic_guess: bool = True, progress: bool = True,
-                 contact: bool = True) -> StaticsReport:
+                 contact: bool = True, mapped: bool = False) -> StaticsReport:
     """Drive the simulator's current state to static equilibrium in place by Newton's method.
 
     The calm equilibrium is solved first from the guess, then the scene's current in one stage of at most
@@ -197,6 +197,9 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max
         Show a progress bar once a solve has taken more than a second.
     contact : bool
         Solve with the line-anchor contact where the scene models it; False leaves it out.
+    mapped : bool
+        With ``warm``: the state is an equilibrium of a coarser compile of the scene mapped onto this one
+        (:func:`moor_env.remesh.remesh_state`), whose slack segments start slack (``statics_stages.slack_counts``).
 
     Raises
     ------
@@ -205,11 +208,11 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max
         From the first guess: the scene has no equilibrium (named cause and key).
     """
     with contextlib.nullcontext() if contact else _contact_off(sim):
-        return _newton(sim, tol_rel, max_iter, max_step_m, warm, analytic_guess, progress)
+        return _newton(sim, tol_rel, max_iter, max_step_m, warm, analytic_guess, progress, mapped)
 
 
 def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, analytic_guess: bool,
-            progress: bool) -> StaticsReport:
+            progress: bool, mapped: bool) -> StaticsReport:
     n_dofs = n_static_dofs(sim)
     if n_dofs == 0:  # nothing to solve (e.g. an anchor held at its drop height, no lines)
         return StaticsReport(0, 0.0, 0.0, 0, "newton")
@@ -219,7 +222,7 @@ def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, a
     ctl[C_TAU] = 1e3 if warm else TAU_START_S
     ctl[C_MAX_STEP] = max_step_m
     current = float(sim.env_f[L.EF_CUR_SCALE])
-    stage = Stage(sim, ctl, max_iter, progress, warm)
+    stage = Stage(sim, ctl, max_iter, progress, not warm or mapped)
     sim.env_f[L.EF_SLACK_SMOOTHING] = SMOOTHING_FINAL
     sim.env_f[L.EF_SEABED_SMOOTHING] = 0.0
     depth_m = _depth_inside_anchor(sim)

@@ -56,12 +56,13 @@ def restore_state(st, saved) -> None:
     st.t = saved.t
 
 
-def slack_counts(st, warm: bool) -> np.ndarray:
-    """Slack counts to start from. From the first guess a segment slack in the start state is slack in the
-    equilibrium sought (the guess lays excess line on the seabed shortened), so K lets it go at once. From a warm
-    start none is counted: a corrected wire length leaves the whole wire slack by a few millimetres, and K without
-    the wire's stiffness would let the release point drop in the first step."""
-    if warm:
+def slack_counts(st, slack_at_start: bool) -> np.ndarray:
+    """Slack counts to start from. Where ``slack_at_start``, a segment slack in the start state is slack in the
+    equilibrium sought, so K lets it go at once: from the first guess (it lays excess line on the seabed
+    shortened) and from a coarse equilibrium mapped onto finer lines (each keeps its segment's strain). Otherwise
+    none is counted: a corrected wire length leaves the whole wire slack by a few millimetres, and K without the
+    wire's stiffness would let the release point drop in the first step."""
+    if not slack_at_start:
         return np.zeros(st.seg_i.shape[0])
     seg = st.seg_i
     length = np.linalg.norm(st.node_pos[seg[:, L.SI_B]] - st.node_pos[seg[:, L.SI_A]], axis=1)
@@ -71,9 +72,9 @@ def slack_counts(st, warm: bool) -> np.ndarray:
 class Stage:
     """Runs the kernel in chunks on one current scale, with the progress bar."""
 
-    def __init__(self, sim, ctl: np.ndarray, max_iter: int, progress: bool, warm: bool) -> None:
+    def __init__(self, sim, ctl: np.ndarray, max_iter: int, progress: bool, slack_at_start: bool) -> None:
         self.sim, self.ctl, self.max_iter, self.progress = sim, ctl, max_iter, progress
-        self.seg_age = slack_counts(sim.state, warm)
+        self.seg_age = slack_counts(sim.state, slack_at_start)
         self.t0 = time.perf_counter()
         self.bar = None
 
