@@ -8,6 +8,7 @@ Last stage of ``YAML -> SceneConfig -> Model -> kernels -> results``: :func:`sol
 from __future__ import annotations
 
 import dataclasses
+import functools
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -24,7 +25,7 @@ from moor_env.physics import layout as L
 from moor_env.physics.anchor import tilt_deg
 from moor_env.physics.integrate import INTEGRATOR_IMPLICIT_EULER, INTEGRATOR_RK2, INTEGRATOR_SYMPLECTIC_EULER
 from moor_env.physics.records import STATE_NAMES, SimState
-from moor_env.physics.statics import solve_equilibrium
+from moor_env.physics.statics import MAX_ITERATIONS, solve_equilibrium
 from moor_env.physics.statics_guess import change_line_length, check_anchor_clearance, check_fibre_clearance
 from moor_env.remesh import remesh_state
 from moor_env.simulator import Simulator, integrator_code
@@ -66,21 +67,49 @@ def _adjust_to_drop_height(sim: Simulator, target_z: float) -> float:
 COARSE_PRESET = "fast"  # the preset whose segment lengths the coarse start's compile takes
 
 
+FIRST_TRY_ITERATIONS = 400  # Newton iterations from the first guess before the coarse start is tried
+
+
 def _equilibrium(sim: Simulator, progress: bool, method: str):
-    """:func:`solve_equilibrium` by ``method``; where Newton's method does not converge from the first guess, from
-    the equilibrium of a coarse compile of the scene (:func:`_from_coarse`) before the relaxation fallback."""
+    """:func:`solve_equilibrium` by ``method``. Where the lines are finer than ``COARSE_PRESET``'s, Newton's method
+    from the first guess gets ``FIRST_TRY_ITERATIONS``, then the coarse start (:func:`_from_coarse`), then the
+    first guess again with the full budget; the relaxation fallback last.
+
+    Why that order: a solve from the first guess that has not converged in a few hundred iterations mostly
+    stalls (with the loop resting against the anchor in current); from the coarse start most of those converge
+    in fewer iterations than the stalled solve has already taken."""
     if method == "relaxation":
         return solve_equilibrium(sim, progress=progress, method=method)
-    try:
-        return solve_equilibrium(sim, progress=progress, method="newton")
-    except StaticsNotConverged as exc:
-        report = _from_coarse(sim, progress)
-        if report is not None:
-            return report
-        if method == "newton" or exc.line_on_anchor:  # the relaxation leaves the line-anchor contact out
-            raise
+    coarse = _coarse_keys(sim.model) is not None
+    budgets = (FIRST_TRY_ITERATIONS, MAX_ITERATIONS) if coarse else (MAX_ITERATIONS,)
+    failure = None
+    for k, budget in enumerate(budgets):
+        if k > 0:
+            report = _from_coarse(sim, progress)
+            if report is not None:
+                return report
+            sim.state = sim.model.initial_state()
+        try:
+            return solve_equilibrium(sim, progress=progress, method="newton", max_iter=budget)
+        except StaticsNotConverged as exc:
+            failure = exc
+    if method == "newton" or failure.line_on_anchor:  # the relaxation leaves the line-anchor contact out
+        raise failure
     sim.state = sim.model.initial_state()
     return solve_equilibrium(sim, progress=progress, method="relaxation")
+
+
+@functools.cache
+def _coarse_segments() -> tuple[tuple[str, float], ...]:
+    """The segment lengths of ``COARSE_PRESET`` (read once: every static solve asks)."""
+    return tuple((k, v) for k, v in fidelity_presets()[COARSE_PRESET].items() if k.endswith("_segment_m"))
+
+
+def _coarse_keys(model: Model) -> dict | None:
+    """The segment lengths of ``COARSE_PRESET``, or None where the model's lines are no finer."""
+    disc = model.scene.discretization
+    keys = dict(_coarse_segments())
+    return None if all(getattr(disc, k) >= v for k, v in keys.items()) else keys
 
 
 def _from_coarse(sim: Simulator, progress: bool):
@@ -96,11 +125,11 @@ def _from_coarse(sim: Simulator, progress: bool):
     failure: on most scenes that start costs more than the first guess (its compile and solve, and tens of
     Newton iterations for the sag)."""
     model = sim.model
-    disc = model.scene.discretization
-    coarse_keys = {k: v for k, v in fidelity_presets()[COARSE_PRESET].items() if k.endswith("_segment_m")}
-    if all(getattr(disc, k) >= v for k, v in coarse_keys.items()):
+    coarse_keys = _coarse_keys(model)
+    if coarse_keys is None:
         return None
-    coarse_scene = model.scene.model_copy(update={"discretization": disc.model_copy(update=coarse_keys)})
+    coarse_scene = model.scene.model_copy(
+        update={"discretization": model.scene.discretization.model_copy(update=coarse_keys)})
     try:
         coarse = solve_statics(coarse_scene, progress=progress, method="newton")
         sim.state = remesh_state(coarse.simulator.state, coarse.simulator.model, model)

@@ -146,3 +146,47 @@ def test_fall_integrator_takes_over_at_the_release():
     assert mixed.dt_s == explicit.dt_s and mixed.n_steps == explicit.n_steps
     assert mixed.touchdown_speed_m_s == pytest.approx(explicit.touchdown_speed_m_s, rel=1e-4)
     assert abs(implicit.touchdown_speed_m_s / explicit.touchdown_speed_m_s - 1.0) > 5e-4
+
+
+# the loop against the anchor in strong current, 1 m chain (default preset): from the statics benchmark's draws
+LOOP_ON_ANCHOR_IN_CURRENT = {
+    "water_depth_m": 592.692, "vessel_spacing_m": 18.152, "mooring_line_length_m": 687.902,
+    "vertical_chain_length_m": 13.058, "drop_height_m": 34.754, "current_scale": 1.2458,
+    "current_direction_deg": 142.986, "anchor_mass_scale": 1.0731, "fidelity": "default"}
+
+
+def _largest_residual_ratio(sim) -> float:
+    """Largest free-node load and the anchor's net force over their weights, on the law the solver ends on."""
+    from moor_env.physics.statics import SMOOTHING_FINAL
+
+    sim.env_f[L.EF_SLACK_SMOOTHING] = SMOOTHING_FINAL
+    try:
+        sim.evaluate_loads()
+        free = sim.state.node_i[:, L.NI_KIND] == L.NODE_FREE
+        g = sim.env_f[L.EF_G]
+        nodes = np.abs(sim.work.node_force[free]).max(axis=1) / (sim.work.node_mass[free] * g)
+        anchor = np.abs(sim.work.body_load[:3]).max() / (sim.model.anchor_mass_kg * g)
+        return float(max(nodes.max(), anchor))
+    finally:
+        sim.env_f[L.EF_SLACK_SMOOTHING] = 0.0
+
+
+def test_coarse_start_solves_the_fine_lines():
+    """Reference: the solver's tolerance on the discrete model's residual (1e-4 of each node's weight; the anchor's
+    net force within 1e-4 of its weight in air, a looser test). From the equilibrium of the scene compiled at the
+    fast preset's segment lengths (2 m chain), mapped onto the 1 m chain, Newton's method converges; the release
+    point moves from the coarse one by the resolution's difference only (within 0.5 m). Lines no finer than the
+    coarse ones get no coarse start."""
+    from moor_env import Simulator, compile_scene
+    from moor_env.simulation import _from_coarse
+
+    scene = load_scene("gjoa-500", LOOP_ON_ANCHOR_IN_CURRENT)
+    sim = Simulator(compile_scene(scene))
+    assert _from_coarse(sim, progress=False) is not None
+    assert _largest_residual_ratio(sim) < 1e-4
+    coarse = solve_statics(load_scene("gjoa-500", {**LOOP_ON_ANCHOR_IN_CURRENT, "fidelity": "fast",
+                                                   "discretization.fit_to_geometry": False}),
+                           progress=False, method="newton")
+    release = sim.state.node_pos[sim.model.release_node]
+    assert np.linalg.norm(release - np.array(coarse.release_point_m)) < 0.5
+    assert _from_coarse(coarse.simulator, progress=False) is None

@@ -22,7 +22,9 @@ All of it runs on the tension-only law smoothed at strain scale ``SMOOTHING_FINA
 by less than EA 1e-8 / 2 on a segment at zero strain, far less elsewhere) and the exact seabed contact.
 :func:`solve_equilibrium` finishes with the slow solver of ``physics/statics_relaxation.py`` where Newton's method
 does not converge (``method="auto"``), except where a line rests on the anchor: the relaxation does not converge
-there either, so the solve stops with the vessel spacing named as the key to change.
+there either, so the solve stops with the vessel spacing named as the key to change. Before that fallback,
+``moor_env.simulation.solve_statics`` tries Newton's method from a coarse compile's equilibrium mapped onto the
+lines (``mapped``).
 """
 
 from __future__ import annotations
