@@ -24,7 +24,7 @@ by less than EA 1e-8 / 2 on a segment at zero strain, far less elsewhere) and th
 does not converge (``method="auto"``), except where a line rests on the anchor: the relaxation does not converge
 there either, so the solve stops with the vessel spacing named as the key to change. Before that fallback,
 ``moor_env.simulation.solve_statics`` tries Newton's method from a coarse compile's equilibrium mapped onto the
-lines (``mapped``).
+lines (``mapped``) where it has not converged from the first guess within a few hundred iterations.
 """
 
 from __future__ import annotations
