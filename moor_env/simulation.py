@@ -65,8 +65,6 @@ def _adjust_to_drop_height(sim: Simulator, target_z: float) -> float:
 
 
 COARSE_PRESET = "fast"  # the preset whose segment lengths the coarse start's compile takes
-
-
 FIRST_TRY_ITERATIONS = 400  # Newton iterations from the first guess before the coarse start is tried
 
 
@@ -121,9 +119,9 @@ def _from_coarse(sim: Simulator, progress: bool):
     Why: Newton's method from the first guess goes through the current's stages, and on a few scenes (most of
     them with the loop resting against the anchor in current) it stalls on the fine lines where it converges on
     the coarse ones. The coarse equilibrium mapped onto the fine lines is already in the scene's current and
-    contact; it differs from the fine equilibrium by the sag within each coarse segment. Why only after a
-    failure: on most scenes that start costs more than the first guess (its compile and solve, and tens of
-    Newton iterations for the sag)."""
+    contact; it differs from the fine equilibrium by the sag within each coarse segment. Why not first: on most
+    scenes that start costs more than the first guess (its compile and solve, and tens of Newton iterations for
+    the sag)."""
     model = sim.model
     coarse_keys = _coarse_keys(model)
     if coarse_keys is None:
