@@ -19,7 +19,7 @@ from tqdm.auto import tqdm
 
 from moor_env.compile import VESSEL_SECOND, Model, compile_scene
 from moor_env.config import SceneConfig, load_scene
-from moor_env.errors import MoorEnvError, StaticsNotConverged
+from moor_env.errors import MoorEnvError, NoEquilibrium, StaticsNotConverged
 from moor_env.fidelity import fidelity_presets
 from moor_env.physics import layout as L
 from moor_env.physics.anchor import tilt_deg
@@ -65,7 +65,7 @@ def _adjust_to_drop_height(sim: Simulator, target_z: float) -> float:
 
 
 COARSE_PRESET = "fast"  # the preset whose segment lengths the coarse start's compile takes
-FIRST_TRY_ITERATIONS = 400  # Newton iterations from the first guess before the coarse start is tried
+FIRST_TRY_ITERATIONS = 200  # Newton iterations from the first guess before the coarse start is tried
 
 
 def _equilibrium(sim: Simulator, progress: bool, method: str):
@@ -121,7 +121,16 @@ def _from_coarse(sim: Simulator, progress: bool):
     the coarse ones. The coarse equilibrium mapped onto the fine lines is already in the scene's current and
     contact; it differs from the fine equilibrium by the sag within each coarse segment. Why not first: on most
     scenes that start costs more than the first guess (its compile and solve, and tens of Newton iterations for
-    the sag)."""
+    the sag).
+
+    Raises
+    ------
+    moor_env.errors.NoEquilibrium
+        Where the coarse equilibrium lays the fibre rope on the seabed and the fine lines do not converge from
+        it: the scene is refused as the coarse compile refuses it, at once, instead of after a last full solve
+        from the first guess (on the statics benchmark every such scene that converged at all was refused for
+        its fibre on the seabed).
+    """
     model = sim.model
     coarse_keys = _coarse_keys(model)
     if coarse_keys is None:
@@ -129,12 +138,30 @@ def _from_coarse(sim: Simulator, progress: bool):
     coarse_scene = model.scene.model_copy(
         update={"discretization": model.scene.discretization.model_copy(update=coarse_keys)})
     try:
-        coarse = solve_statics(coarse_scene, progress=progress, method="newton")
-        sim.state = remesh_state(coarse.simulator.state, coarse.simulator.model, model)
-        report = solve_equilibrium(sim, warm=True, progress=progress, method="newton", mapped=True)
+        coarse = _hanging_equilibrium(compile_scene(coarse_scene), 1e-3, progress, "newton", checks=False)
     except (MoorEnvError, ValueError):
         return None
+    refusal = _fibre_refusal(coarse.simulator)
+    try:
+        sim.state = remesh_state(coarse.simulator.state, coarse.simulator.model, model)
+        budget = MAX_ITERATIONS if refusal is None else FIRST_TRY_ITERATIONS
+        report = solve_equilibrium(sim, warm=True, progress=progress, method="newton", mapped=True,
+                                   max_iter=budget)
+    except (MoorEnvError, ValueError):
+        if refusal is not None:
+            raise refusal from None
+        return None
     return dataclasses.replace(report, iterations=report.iterations + coarse.iterations)
+
+
+def _fibre_refusal(sim: Simulator) -> NoEquilibrium | None:
+    """The refusal of an equilibrium whose fibre rope rests on the seabed
+    (:func:`~moor_env.physics.statics_guess.check_fibre_clearance`), or None."""
+    try:
+        check_fibre_clearance(sim)
+    except NoEquilibrium as exc:
+        return exc
+    return None
 
 
 def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: bool = True,
@@ -153,8 +180,15 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: boo
         The scene has none (the cause and the key to change are named).
     moor_env.errors.StaticsNotConverged
     """
-    t0 = time.perf_counter()
     model = scene if isinstance(scene, Model) else compile_scene(scene)
+    return _hanging_equilibrium(model, tol_m, progress, method, checks=True)
+
+
+def _hanging_equilibrium(model: Model, tol_m: float, progress: bool, method: str, checks: bool) -> StaticResult:
+    """:func:`solve_statics` of a compiled model; ``checks`` False skips the refusals of an equilibrium (fibre on
+    the seabed, a line through the anchor): the coarse start maps such an equilibrium too, and the fine lines'
+    own equilibrium is then checked."""
+    t0 = time.perf_counter()
     sim = Simulator(model)
     report = _equilibrium(sim, progress, method)
     iterations = report.iterations
@@ -178,8 +212,9 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: boo
             if abs(err) >= tol_m:
                 raise StaticsNotConverged(f"the anchor tip hangs {err:+.3g} m from its drop height after 8 wire "
                                           f"corrections (tolerance {tol_m:g} m)", None)
-        check_fibre_clearance(sim)
-        check_anchor_clearance(sim, finished)
+        if checks:
+            check_fibre_clearance(sim)
+            check_anchor_clearance(sim, finished)
     sim.state.line_f[:, L.LF_MAX_TENSION] = 0.0
     wall = time.perf_counter() - t0
     release = None

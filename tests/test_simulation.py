@@ -190,3 +190,32 @@ def test_coarse_start_solves_the_fine_lines():
     release = sim.state.node_pos[sim.model.release_node]
     assert np.linalg.norm(release - np.array(coarse.release_point_m)) < 0.5
     assert _from_coarse(coarse.simulator, progress=False) is None
+
+
+def test_coarse_start_refuses_a_fibre_the_coarse_lines_lay_on_the_seabed(monkeypatch):
+    """Where the coarse compile's equilibrium lays the fibre rope on the seabed and the fine lines do not converge
+    from it, the coarse start refuses the scene with that cause and key (NoEquilibrium) instead of returning None
+    (which would go on to a last full solve); where the fine lines converge, their own equilibrium is returned."""
+    from moor_env import Simulator, compile_scene
+    from moor_env import simulation as simulation_module
+    from moor_env.errors import NoEquilibrium, StaticsNotConverged
+
+    long_line = {"mooring_line_length_m": 700.0, "vessel_spacing_m": 60.0, "current_scale": 0.0}
+    with pytest.raises(NoEquilibrium):  # the reference: the scene itself is refused for its fibre
+        solve_statics(load_scene("gjoa-500", long_line), progress=False, method="newton")
+    sim = Simulator(compile_scene(load_scene("gjoa-500", long_line)))
+    assert simulation_module._from_coarse(sim, progress=False) is not None
+
+    solve = simulation_module.solve_equilibrium
+
+    def mapped_start_stalls(*args, **kwargs):
+        if kwargs.get("mapped"):
+            raise StaticsNotConverged("stalled", 1.0)
+        return solve(*args, **kwargs)
+
+    monkeypatch.setattr(simulation_module, "solve_equilibrium", mapped_start_stalls)
+    sim = Simulator(compile_scene(load_scene("gjoa-500", long_line)))
+    with pytest.raises(NoEquilibrium) as refused:
+        simulation_module._from_coarse(sim, progress=False)
+    assert refused.value.key == "installation.mooring_line_length_m"
+    assert refused.value.cause.startswith("the fibre rope")
