@@ -172,6 +172,15 @@ def surface_distance(px, py, pz, body_state, shape):
 
 
 @jit
+def bounding_radius_m(shape):
+    """Radius of the sphere about the anchor's COG that holds its bounding cylinder in any orientation [m]."""
+    r2 = 0.0
+    for i in range(shape.shape[0]):
+        r2 = max(r2, max(shape[i, CS_FRONT] ** 2, shape[i, CS_BACK] ** 2) + shape[i, CS_RADIUS] ** 2)
+    return math.sqrt(r2)
+
+
+@jit
 def within_reach(px, py, pz, body_state, shape, margin_m=0.0):
     """Whether a point lies inside the cylinder that bounds the anchor, grown by ``margin_m`` [m] on every side
     (cheap test before the contact law)."""

@@ -43,9 +43,10 @@ from __future__ import annotations
 import math
 
 from moor_env.physics._jit import jit
-from moor_env.physics.anchor_surface import from_cog, surface_distance, within_reach
+from moor_env.physics.anchor_surface import bounding_radius_m, from_cog, surface_distance, within_reach
 from moor_env.physics.layout import (
     BS_OMEGA,
+    BS_POS,
     BS_VEL,
     CF_MU,
     CF_STICK_SPEED,
@@ -236,13 +237,21 @@ def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_st
 
     The node's mass in the damping is its structural mass (``node_mass``, welded parts included); its added mass
     (a few % for chain) only makes the contact slightly softer and less damped than chosen. Nodes below the seabed
-    (``seabed_z`` [m]) are left to the seabed (:func:`may_touch`).
+    (``seabed_z`` [m]) are left to the seabed (:func:`may_touch`). Broad phase: one distance to the anchor's COG
+    per node against the sphere that holds the anchor (most of a line lies far from it).
     """
     lx = ly = lz = mx = my = mz = 0.0
     count = 0
     deepest = 0.0
+    reach2 = bounding_radius_m(shape) ** 2
+    gx = body_state[BS_POS]
+    gy = body_state[BS_POS + 1]
+    gz = body_state[BS_POS + 2]
     for n in range(node_i.shape[0]):
-        if not may_touch(node_pos, node_i, n, body_state, shape, seabed_z):
+        dx = node_pos[n, 0] - gx
+        dy = node_pos[n, 1] - gy
+        dz = node_pos[n, 2] - gz
+        if dx * dx + dy * dy + dz * dz > reach2 or not may_touch(node_pos, node_i, n, body_state, shape, seabed_z):
             continue
         px = node_pos[n, 0]
         py = node_pos[n, 1]

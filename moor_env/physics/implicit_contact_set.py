@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import math
 
-from moor_env.physics._jit import jit_no_refcount, jit_step
-from moor_env.physics.anchor_surface import surface_distance, within_reach
+from moor_env.physics._jit import jit_no_refcount
+from moor_env.physics.anchor_surface import bounding_radius_m, surface_distance, within_reach
 from moor_env.physics.contact import relative_velocity
 from moor_env.physics.implicit_contact import (
     SET_BITS,
@@ -33,9 +33,6 @@ from moor_env.physics.implicit_contact import (
 )
 from moor_env.physics.layout import (
     BS_POS,
-    CS_BACK,
-    CS_FRONT,
-    CS_RADIUS,
     EF_DEPTH,
     EF_SPEED_LIMIT,
     NI_KIND,
@@ -46,15 +43,6 @@ DEPTH_TOLERANCE_M = 1e-6  # a node must miss its predicted set by this much befo
 # a node this close to the anchor counts as resting on it, its explicit load counted in its landing (h^2 a off a
 # surface accelerating at a: 0.7 mm at 5.7 m/s^2 and 11.25 ms; 2 mm covers 15 m/s^2)
 RESTING_GAP_M = 2e-3
-
-
-@jit_step
-def bounding_radius_m(shape):
-    """Radius of the sphere about the anchor's COG that holds its bounding cylinder in any orientation [m]."""
-    r2 = 0.0
-    for i in range(shape.shape[0]):
-        r2 = max(r2, max(shape[i, CS_FRONT] ** 2, shape[i, CS_BACK] ** 2) + shape[i, CS_RADIUS] ** 2)
-    return math.sqrt(r2)
 
 
 @jit_no_refcount
