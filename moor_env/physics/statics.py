@@ -92,7 +92,7 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS
     without the contact does not converge with a line ending inside the anchor, from the start (a warm start that
     already rests on the anchor goes to the contact problem at once). Where it does not converge clear of the
     anchor, the contact problem is not tried: with no line at the anchor the contact solve repeats the same
-    iterations (traced on the slowest scenes of the statics benchmark: identical stage by stage). Where a contact
+    iterations (traced on one of the statics benchmark's slowest scenes: identical stage by stage). Where a contact
     solve does not converge and a line lay inside the anchor at its start or end, no fallback is run (the
     relaxation, which leaves the contact out, does not reach those either): :class:`StaticsNotConverged` names the
     vessel spacing; the iterations reported count both solves.
