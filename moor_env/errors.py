@@ -81,11 +81,16 @@ class StaticsNotConverged(MoorEnvError, RuntimeError):
     line_on_anchor : bool
         A line lay inside the anchor's surface at the start or the end of the solve (where the scene models their
         contact): the relaxation fallback, which leaves the contact out, is not run for it.
+    inside_anchor : bool
+        A line lay inside the anchor's surface at the start or the end of the solve, whether or not that solve
+        modelled the contact (a solve without it is then worth repeating with it).
     """
 
-    def __init__(self, message: str, residual_rel: float | None = None, line_on_anchor: bool = False) -> None:
+    def __init__(self, message: str, residual_rel: float | None = None, line_on_anchor: bool = False,
+                 inside_anchor: bool = False) -> None:
         self.residual_rel = residual_rel
         self.line_on_anchor = line_on_anchor
+        self.inside_anchor = inside_anchor or line_on_anchor
         super().__init__(message)
 
 

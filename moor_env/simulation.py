@@ -19,7 +19,7 @@ from tqdm.auto import tqdm
 
 from moor_env.compile import VESSEL_SECOND, Model, compile_scene
 from moor_env.config import SceneConfig, load_scene
-from moor_env.errors import MoorEnvError, NoEquilibrium, StaticsNotConverged
+from moor_env.errors import MoorEnvError, NoEquilibrium, SimulationDiverged, StaticsNotConverged
 from moor_env.fidelity import fidelity_presets
 from moor_env.physics import layout as L
 from moor_env.physics.anchor import tilt_deg
@@ -127,9 +127,10 @@ def _from_coarse(sim: Simulator, progress: bool):
     ------
     moor_env.errors.NoEquilibrium
         Where the coarse equilibrium lays the fibre rope on the seabed and the fine lines do not converge from
-        it within ``FIRST_TRY_ITERATIONS``: the scene is refused as the coarse compile refuses it, at once,
-        instead of after a last full solve from the first guess (traced on the statics benchmark: of four such
-        scenes, the two whose fine lines converged at all were refused for their fibre on the seabed too).
+        it within ``FIRST_TRY_ITERATIONS``: the scene is refused as the coarse compile refuses it, the cause
+        saying so, at once instead of after a last full solve from the first guess (where fine lines converge
+        from a coarse equilibrium, theirs lies within decimetres of it on the scenes traced, so a fibre resting
+        on the seabed in one rests there in the other unless it barely touches).
     """
     model = sim.model
     coarse_keys = _coarse_keys(model)
@@ -144,23 +145,30 @@ def _from_coarse(sim: Simulator, progress: bool):
     refusal = _fibre_refusal(coarse.simulator)
     try:
         sim.state = remesh_state(coarse.simulator.state, coarse.simulator.model, model)
-        budget = MAX_ITERATIONS if refusal is None else FIRST_TRY_ITERATIONS
+    except ValueError:  # lines that do not map
+        return None
+    budget = MAX_ITERATIONS if refusal is None else FIRST_TRY_ITERATIONS
+    try:
         report = solve_equilibrium(sim, warm=True, progress=progress, method="newton", mapped=True,
                                    max_iter=budget)
-    except (MoorEnvError, ValueError):
-        if refusal is not None:
+    except MoorEnvError as exc:
+        if refusal is not None and isinstance(exc, (StaticsNotConverged, SimulationDiverged)):
             raise refusal from None
         return None
     return dataclasses.replace(report, iterations=report.iterations + coarse.iterations)
 
 
-def _fibre_refusal(sim: Simulator) -> NoEquilibrium | None:
-    """The refusal of an equilibrium whose fibre rope rests on the seabed
-    (:func:`~moor_env.physics.statics_guess.check_fibre_clearance`), or None."""
+def _fibre_refusal(coarse: Simulator) -> NoEquilibrium | None:
+    """The refusal of a coarse compile's equilibrium whose fibre rope rests on the seabed
+    (:func:`~moor_env.physics.statics_guess.check_fibre_clearance`), its cause saying where it was found, or
+    None."""
     try:
-        check_fibre_clearance(sim)
+        check_fibre_clearance(coarse)
     except NoEquilibrium as exc:
-        return exc
+        return NoEquilibrium(exc.key, exc.value, exc.allowed,
+                             f"{exc.cause} (in the equilibrium of the scene at the {COARSE_PRESET} preset's segment "
+                             f"lengths; its own lines did not converge within {FIRST_TRY_ITERATIONS} iterations "
+                             f"from it)")
     return None
 
 

@@ -218,4 +218,4 @@ def test_coarse_start_refuses_a_fibre_the_coarse_lines_lay_on_the_seabed(monkeyp
     with pytest.raises(NoEquilibrium) as refused:
         simulation_module._from_coarse(sim, progress=False)
     assert refused.value.key == "installation.mooring_line_length_m"
-    assert refused.value.cause.startswith("the fibre rope")
+    assert refused.value.cause.startswith("the fibre rope") and "fast preset" in refused.value.cause

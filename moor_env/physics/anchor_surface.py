@@ -173,7 +173,7 @@ def surface_distance(px, py, pz, body_state, shape):
 
 @jit
 def bounding_radius_m(shape):
-    """Radius of the sphere about the anchor's COG that holds its bounding cylinder in any orientation [m]."""
+    """Radius of the sphere about the anchor's COG that holds every section's cylinder (the whole surface) [m]."""
     r2 = 0.0
     for i in range(shape.shape[0]):
         r2 = max(r2, max(shape[i, CS_FRONT] ** 2, shape[i, CS_BACK] ** 2) + shape[i, CS_RADIUS] ** 2)

@@ -89,10 +89,10 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS
     Where the scene models the line-anchor contact, the lines are solved without it first: an equilibrium with no
     line inside the anchor is one of the contact problem too (every contact force is zero), and most scenes have
     one. Where a line ends inside the anchor, the contact problem is solved from that equilibrium; where the solve
-    without the contact does not converge with a line ending inside the anchor, from the start (a warm start that
-    already rests on the anchor goes to the contact problem at once). Where it does not converge clear of the
-    anchor, the contact problem is not tried: with no line at the anchor the contact solve repeats the same
-    iterations (traced on one of the statics benchmark's slowest scenes: identical stage by stage). Where a contact
+    without the contact does not converge with a line inside the anchor at its start or end, from the start (a
+    warm start that already rests on the anchor goes to the contact problem at once). Where it does not converge
+    and no line lay inside the anchor at its start or end, the contact problem is not tried: it would take the
+    same first steps and, mostly, the same iterations to the end. Where a contact
     solve does not converge and a line lay inside the anchor at its start or end, no fallback is run (the
     relaxation, which leaves the contact out, does not reach those either): :class:`StaticsNotConverged` names the
     vessel spacing; the iterations reported count both solves.
@@ -131,7 +131,7 @@ def _by_newton(sim, start, method: str, args: dict) -> StaticsReport | None:
                 return clear
         except (StaticsNotConverged, SimulationDiverged) as exc:
             failure = exc
-        if not contact or (failure is not None and _depth_inside_anchor(sim) <= 0.0):
+        if not contact or (failure is not None and not getattr(failure, "inside_anchor", True)):
             raise failure
         if failure is not None:
             restore_state(sim.state, start)
@@ -231,6 +231,7 @@ def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, a
     sim.env_f[L.EF_SLACK_SMOOTHING] = SMOOTHING_FINAL
     sim.env_f[L.EF_SEABED_SMOOTHING] = 0.0
     depth_m = _depth_inside_anchor(sim)
+    start_inside = anchor_intrusion(sim)[0] > 0.0
     try:
         calm = 0.0 if current > 0.0 and not warm else current
         if depth_m > RAMP_DEPTH_M:
@@ -242,6 +243,7 @@ def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, a
             apply_current(stage, current, tol_rel, max_iter)
     except StaticsNotConverged as exc:  # the anchor's 5x5 system singular
         exc.line_on_anchor = depth_m > 0.0 or _depth_inside_anchor(sim) > 0.0
+        exc.inside_anchor = start_inside or anchor_intrusion(sim)[0] > 0.0
         raise
     finally:
         sim.env_f[L.EF_CUR_SCALE] = current
@@ -257,7 +259,8 @@ def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, a
                  if on_anchor else "")
         raise StaticsNotConverged(f"static equilibrium not reached after {reason}{where} (largest residual/weight "
                                   f"{ctl[C_RESIDUAL]:.3g}, tolerance {tol_rel:g})", float(ctl[C_RESIDUAL]),
-                                  line_on_anchor=on_anchor)
+                                  line_on_anchor=on_anchor,
+                                  inside_anchor=start_inside or anchor_intrusion(sim)[0] > 0.0)
     return StaticsReport(iterations, float(ctl[C_RESIDUAL]), 0.0, n_dofs, "newton")
 
 

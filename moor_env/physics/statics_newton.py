@@ -18,12 +18,11 @@ at tau >= 640 s (from the start's 10 s), where D / tau^2 is below 2.5e-3 N/m per
 ``OVERSIZE`` step limits cuts tau at once (K nearly singular: a part of the model held by slack segments alone).
 A step that raises the largest residual more than ``RESIDUAL_JUMP`` times is taken back whatever the step at its
 end: a step along a nearly free mode (a stretch of line between slack segments) can stretch segments so far that
-K at its end is stiffer and its step short, which the step test alone would keep; traced on a coarse equilibrium
-mapped onto finer lines, one such step raised the residual from 95 to 8e6 node weights and the solve took 190
-iterations to recover. Why so high a bound: the first guess's steps raise the residual a thousandfold where a
-swing closes in one stiff segment, harmlessly; at 1e4 many easy scenes of the statics benchmark took a few
-iterations more (9 -> 13), at 1e5 their median time did not change and the iterations of all converged scenes
-fell by 3 %.
+K at its end is stiffer and its step short, which the step test alone would keep, and the solve then spends
+hundreds of iterations undoing it (on a coarse equilibrium mapped onto finer lines: a residual of 95 node weights
+raised to 8e6). Why so high a bound: the first guess's steps raise the residual a thousandfold where a swing
+closes in one stiff segment, harmlessly; a bound of 1e4 costs the easy scenes of the statics benchmark a few
+iterations each, 1e5 leaves their time unchanged.
 Converged when the residual is within tolerance and the step at the state is below the step tolerance.
 """
 

@@ -216,3 +216,30 @@ def test_clearance_check_after_each_solver():
     with pytest.raises(NoEquilibrium) as refused:
         check_anchor_clearance(sim, "newton")
     assert refused.value.key == "discretization.contact_stiffness_scale"
+
+
+@pytest.mark.parametrize("inside", [False, True])
+def test_failed_solve_is_repeated_with_the_contact_only_where_a_line_met_the_anchor(monkeypatch, inside):
+    """Where the solve without the contact does not converge, the contact problem is solved from the start only
+    where a line lay inside the anchor at that solve's start or end (``StaticsNotConverged.inside_anchor``);
+    otherwise the failure is raised as it is (with the contact the solve would take the same steps)."""
+    from moor_env import Simulator, compile_scene
+    from moor_env.physics import statics
+
+    calls = []
+
+    def newton(sim, contact=True, **kwargs):
+        calls.append(contact)
+        if not contact:
+            raise StaticsNotConverged("stalled", 1.0, inside_anchor=inside)
+        return statics.StaticsReport(1, 0.0, 0.0, 1, "newton")
+
+    monkeypatch.setattr(statics, "solve_newton", newton)
+    sim = Simulator(compile_scene(load_scene("gjoa-500", {"vessel_spacing_m": 0.0, "fidelity": "fast"})))
+    if inside:
+        assert statics.solve_equilibrium(sim, method="newton", progress=False).iterations == 1
+        assert calls == [False, True]
+    else:
+        with pytest.raises(StaticsNotConverged, match="stalled"):
+            statics.solve_equilibrium(sim, method="newton", progress=False)
+        assert calls == [False]
