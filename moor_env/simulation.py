@@ -7,7 +7,6 @@ Last stage of ``YAML -> SceneConfig -> Model -> kernels -> results``: :func:`sol
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import time
 from dataclasses import asdict, dataclass, field
@@ -17,17 +16,21 @@ from typing import Any
 import numpy as np
 from tqdm.auto import tqdm
 
+from moor_env.coarse_start import FIRST_TRY_ITERATIONS, CoarseStart
 from moor_env.compile import VESSEL_SECOND, Model, compile_scene
 from moor_env.config import SceneConfig, load_scene
-from moor_env.errors import MoorEnvError, NoEquilibrium, SimulationDiverged, StaticsNotConverged
-from moor_env.fidelity import fidelity_presets
+from moor_env.errors import StaticsNotConverged
 from moor_env.physics import layout as L
 from moor_env.physics.anchor import tilt_deg
 from moor_env.physics.integrate import INTEGRATOR_IMPLICIT_EULER, INTEGRATOR_RK2, INTEGRATOR_SYMPLECTIC_EULER
 from moor_env.physics.records import STATE_NAMES, SimState
 from moor_env.physics.statics import MAX_ITERATIONS, solve_equilibrium
-from moor_env.physics.statics_guess import change_line_length, check_anchor_clearance, check_fibre_clearance
-from moor_env.remesh import remesh_state
+from moor_env.physics.statics_guess import (
+    change_line_length,
+    check_anchor_clearance,
+    check_fibre_clearance,
+    first_guess,
+)
 from moor_env.simulator import Simulator, integrator_code
 
 STATE_ARRAY_FIELDS = STATE_NAMES  # the arrays of a SimState, in order
@@ -64,31 +67,35 @@ def _adjust_to_drop_height(sim: Simulator, target_z: float) -> float:
     return float(tip[2] - target_z)
 
 
-COARSE_PRESET = "fast"  # the preset whose segment lengths the coarse start's compile takes
-FIRST_TRY_ITERATIONS = 200  # Newton iterations from the first guess before the coarse start is tried
-
-
-def _equilibrium(sim: Simulator, progress: bool, method: str):
-    """:func:`solve_equilibrium` by ``method``. Where the lines are finer than ``COARSE_PRESET``'s, Newton's method
-    from the first guess gets ``FIRST_TRY_ITERATIONS``, then the coarse start (:func:`_from_coarse`), then the
-    first guess again with the full budget; the relaxation fallback last.
+def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool, max_iter: int = MAX_ITERATIONS):
+    """:func:`solve_equilibrium` by ``method`` within ``max_iter`` Newton iterations. Where the lines are finer than
+    the coarse start's (``moor_env.coarse_start``), a scene whose fibre rope the coarse equilibrium lays on the
+    seabed is refused first (where ``checks``); then Newton's method from the first guess gets
+    ``FIRST_TRY_ITERATIONS``, then the coarse start (:meth:`CoarseStart.start`), then the first guess again with
+    the full budget; the relaxation fallback last.
 
     Why that order: a solve from the first guess that has not converged in a few hundred iterations mostly
     stalls (with the loop resting against the anchor in current); from the coarse start most of those converge
-    in fewer iterations than the stalled solve has already taken."""
+    in fewer iterations than the stalled solve has already taken. Why not the coarse start first: on most scenes
+    it costs more than the first guess (its compile and solve, and tens of Newton iterations for the sag)."""
     if method == "relaxation":
         return solve_equilibrium(sim, progress=progress, method=method)
-    coarse = _coarse_keys(sim.model) is not None
-    budgets = (FIRST_TRY_ITERATIONS, MAX_ITERATIONS) if coarse else (MAX_ITERATIONS,)
+    coarse = CoarseStart(sim, functools.partial(_coarse_solve, progress=progress))
+    guessed = checks and coarse.keys is not None
+    if guessed:  # the first try starts from this guess
+        first_guess(sim)
+        coarse.refuse_fibre_on_seabed()
+    budgets = (FIRST_TRY_ITERATIONS, max_iter) if coarse.keys is not None else (max_iter,)
     failure = None
     for k, budget in enumerate(budgets):
         if k > 0:
-            report = _from_coarse(sim, progress)
+            report = coarse.start(progress)
             if report is not None:
                 return report
             sim.state = sim.model.initial_state()
         try:
-            return solve_equilibrium(sim, progress=progress, method="newton", max_iter=budget)
+            return solve_equilibrium(sim, progress=progress, method="newton", max_iter=budget,
+                                     analytic_guess=not (guessed and k == 0))
         except StaticsNotConverged as exc:
             failure = exc
     if method == "newton" or failure.line_on_anchor:  # the relaxation leaves the line-anchor contact out
@@ -97,79 +104,10 @@ def _equilibrium(sim: Simulator, progress: bool, method: str):
     return solve_equilibrium(sim, progress=progress, method="relaxation")
 
 
-@functools.cache
-def _coarse_segments() -> tuple[tuple[str, float], ...]:
-    """The segment lengths of ``COARSE_PRESET`` (read once: every static solve asks)."""
-    return tuple((k, v) for k, v in fidelity_presets()[COARSE_PRESET].items() if k.endswith("_segment_m"))
-
-
-def _coarse_keys(model: Model) -> dict | None:
-    """The segment lengths of ``COARSE_PRESET``, or None where the model's lines are no finer."""
-    disc = model.scene.discretization
-    keys = dict(_coarse_segments())
-    return None if all(getattr(disc, k) >= v for k, v in keys.items()) else keys
-
-
-def _from_coarse(sim: Simulator, progress: bool):
-    """Solve ``sim`` from the equilibrium of its scene compiled at the segment lengths of ``COARSE_PRESET``,
-    mapped onto its resolution (:func:`moor_env.remesh.remesh_state`); the report (iterations of both solves),
-    or None where that start is not to be had (lines no finer than the coarse ones, the coarse scene unsolved,
-    lines that do not map) or Newton's method does not converge from it.
-
-    Why: Newton's method from the first guess goes through the current's stages, and on a few scenes (most of
-    them with the loop resting against the anchor in current) it stalls on the fine lines where it converges on
-    the coarse ones. The coarse equilibrium mapped onto the fine lines is already in the scene's current and
-    contact; it differs from the fine equilibrium by the sag within each coarse segment. Why not first: on most
-    scenes that start costs more than the first guess (its compile and solve, and tens of Newton iterations for
-    the sag).
-
-    Raises
-    ------
-    moor_env.errors.NoEquilibrium
-        Where the coarse equilibrium lays the fibre rope on the seabed and the fine lines do not converge from
-        it within ``FIRST_TRY_ITERATIONS``: the scene is refused as the coarse compile refuses it, the cause
-        saying so, at once instead of after a last full solve from the first guess (where fine lines converge
-        from a coarse equilibrium, theirs lies within decimetres of it on the scenes traced, so a fibre resting
-        on the seabed in one rests there in the other unless it barely touches).
-    """
-    model = sim.model
-    coarse_keys = _coarse_keys(model)
-    if coarse_keys is None:
-        return None
-    coarse_scene = model.scene.model_copy(
-        update={"discretization": model.scene.discretization.model_copy(update=coarse_keys)})
-    try:
-        coarse = _hanging_equilibrium(compile_scene(coarse_scene), 1e-3, progress, "newton", checks=False)
-    except (MoorEnvError, ValueError):
-        return None
-    refusal = _fibre_refusal(coarse.simulator)
-    try:
-        sim.state = remesh_state(coarse.simulator.state, coarse.simulator.model, model)
-    except ValueError:  # lines that do not map
-        return None
-    budget = MAX_ITERATIONS if refusal is None else FIRST_TRY_ITERATIONS
-    try:
-        report = solve_equilibrium(sim, warm=True, progress=progress, method="newton", mapped=True,
-                                   max_iter=budget)
-    except MoorEnvError as exc:
-        if refusal is not None and isinstance(exc, (StaticsNotConverged, SimulationDiverged)):
-            raise refusal from None
-        return None
-    return dataclasses.replace(report, iterations=report.iterations + coarse.iterations)
-
-
-def _fibre_refusal(coarse: Simulator) -> NoEquilibrium | None:
-    """The refusal of a coarse compile's equilibrium whose fibre rope rests on the seabed
-    (:func:`~moor_env.physics.statics_guess.check_fibre_clearance`), its cause saying where it was found, or
-    None."""
-    try:
-        check_fibre_clearance(coarse)
-    except NoEquilibrium as exc:
-        return NoEquilibrium(exc.key, exc.value, exc.allowed,
-                             f"{exc.cause} (in the equilibrium of the scene at the {COARSE_PRESET} preset's segment "
-                             f"lengths; its own lines did not converge within {FIRST_TRY_ITERATIONS} iterations "
-                             f"from it)")
-    return None
+def _coarse_solve(model: Model, max_iter: int, progress: bool) -> StaticResult:
+    """The coarse start's solve: the hanging equilibrium of a coarse compile by Newton's method, without the
+    refusals of an equilibrium (the fine lines' own equilibrium is checked)."""
+    return _hanging_equilibrium(model, 1e-3, progress, "newton", checks=False, max_iter=max_iter)
 
 
 def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: bool = True,
@@ -194,14 +132,14 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: boo
 
 
 def _hanging_equilibrium(model: Model, tol_m: float, progress: bool, method: str, checks: bool,
-                         t0: float | None = None) -> StaticResult:
+                         t0: float | None = None, max_iter: int = MAX_ITERATIONS) -> StaticResult:
     """:func:`solve_statics` of a compiled model; ``checks`` False skips the refusals of an equilibrium (fibre on
     the seabed, a line through the anchor): the coarse start maps such an equilibrium too, and the fine lines'
     own equilibrium is then checked. ``t0``: the ``time.perf_counter`` the wall time counts from (the compile
     included where given)."""
     t0 = time.perf_counter() if t0 is None else t0
     sim = Simulator(model)
-    report = _equilibrium(sim, progress, method)
+    report = _equilibrium(sim, progress, method, checks, max_iter)
     iterations = report.iterations
     finished = report.method
     sc = model.scene

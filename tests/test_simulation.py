@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import json
 import subprocess
 import sys
@@ -171,6 +172,14 @@ def _largest_residual_ratio(sim) -> float:
         sim.env_f[L.EF_SLACK_SMOOTHING] = 0.0
 
 
+def _coarse_start(sim):
+    """The coarse start of a static solve of ``sim`` (as ``solve_statics`` makes it)."""
+    from moor_env.coarse_start import CoarseStart
+    from moor_env.simulation import _coarse_solve
+
+    return CoarseStart(sim, functools.partial(_coarse_solve, progress=False))
+
+
 def test_coarse_start_solves_the_fine_lines():
     """Reference: the solver's tolerance on the discrete model's residual (1e-4 of each node's weight; the anchor's
     net force within 1e-4 of its weight in air, a looser test). From the equilibrium of the scene compiled at the
@@ -178,18 +187,17 @@ def test_coarse_start_solves_the_fine_lines():
     point moves from the coarse one by the resolution's difference only (within 0.5 m). Lines no finer than the
     coarse ones get no coarse start."""
     from moor_env import Simulator, compile_scene
-    from moor_env.simulation import _from_coarse
 
     scene = load_scene("gjoa-500", LOOP_ON_ANCHOR_IN_CURRENT)
     sim = Simulator(compile_scene(scene))
-    assert _from_coarse(sim, progress=False) is not None
+    assert _coarse_start(sim).start(progress=False) is not None
     assert _largest_residual_ratio(sim) < 1e-4
     coarse = solve_statics(load_scene("gjoa-500", {**LOOP_ON_ANCHOR_IN_CURRENT, "fidelity": "fast",
                                                    "discretization.fit_to_geometry": False}),
                            progress=False, method="newton")
     release = sim.state.node_pos[sim.model.release_node]
     assert np.linalg.norm(release - np.array(coarse.release_point_m)) < 0.5
-    assert _from_coarse(coarse.simulator, progress=False) is None
+    assert _coarse_start(coarse.simulator).start(progress=False) is None
 
 
 def test_coarse_start_refuses_a_fibre_the_coarse_lines_lay_on_the_seabed(monkeypatch):
@@ -197,25 +205,73 @@ def test_coarse_start_refuses_a_fibre_the_coarse_lines_lay_on_the_seabed(monkeyp
     from it, the coarse start refuses the scene with that cause and key (NoEquilibrium) instead of returning None
     (which would go on to a last full solve); where the fine lines converge, their own equilibrium is returned."""
     from moor_env import Simulator, compile_scene
-    from moor_env import simulation as simulation_module
+    from moor_env import coarse_start as coarse_module
     from moor_env.errors import NoEquilibrium, StaticsNotConverged
 
     long_line = {"mooring_line_length_m": 700.0, "vessel_spacing_m": 60.0, "current_scale": 0.0}
     with pytest.raises(NoEquilibrium):  # the reference: the scene itself is refused for its fibre
         solve_statics(load_scene("gjoa-500", long_line), progress=False, method="newton")
     sim = Simulator(compile_scene(load_scene("gjoa-500", long_line)))
-    assert simulation_module._from_coarse(sim, progress=False) is not None
+    assert _coarse_start(sim).start(progress=False) is not None
 
-    solve = simulation_module.solve_equilibrium
+    solve = coarse_module.solve_equilibrium
 
     def mapped_start_stalls(*args, **kwargs):
         if kwargs.get("mapped"):
             raise StaticsNotConverged("stalled", 1.0)
         return solve(*args, **kwargs)
 
-    monkeypatch.setattr(simulation_module, "solve_equilibrium", mapped_start_stalls)
+    monkeypatch.setattr(coarse_module, "solve_equilibrium", mapped_start_stalls)
     sim = Simulator(compile_scene(load_scene("gjoa-500", long_line)))
     with pytest.raises(NoEquilibrium) as refused:
-        simulation_module._from_coarse(sim, progress=False)
+        _coarse_start(sim).start(progress=False)
     assert refused.value.key == "installation.mooring_line_length_m"
     assert refused.value.cause.startswith("the fibre rope") and "fast preset" in refused.value.cause
+
+
+# The statics benchmark's scene 423 (seed 0), rounded: its coarse equilibrium rests one fibre node on the seabed,
+# its own lines hang the fibre a few centimetres clear.
+ONE_COARSE_FIBRE_NODE = {"water_depth_m": 1361.78, "vessel_spacing_m": 465.83, "mooring_line_length_m": 1611.93,
+                         "vertical_chain_length_m": 12.44, "drop_height_m": 50.37, "current_scale": 0.36,
+                         "current_direction_deg": 133.85, "anchor_mass_scale": 0.9255, "fidelity": "default"}
+
+
+def test_fibre_the_coarse_equilibrium_lays_on_the_seabed_is_refused_before_the_fine_solve(monkeypatch):
+    """Reference: the fine lines' own equilibrium (solved without the refusals) rests the fibre rope on the seabed.
+    With the refusals, the scene is refused from the coarse equilibrium (two or more fibre nodes on the seabed)
+    without a Newton solve of the fine lines."""
+    from moor_env import Simulator, compile_scene
+    from moor_env import simulation as simulation_module
+    from moor_env.errors import NoEquilibrium
+    from moor_env.physics.statics_guess import fibre_on_seabed
+
+    long_line = {"mooring_line_length_m": 750.0, "vessel_spacing_m": 60.0, "current_scale": 0.0}
+    model = compile_scene(load_scene("gjoa-500", long_line))
+    own = simulation_module._hanging_equilibrium(model, 1e-3, False, "newton", checks=False)
+    assert fibre_on_seabed(own.simulator)[0] >= 2
+    fine_nodes = model.node_i.shape[0]
+    solve = simulation_module.solve_equilibrium
+
+    def not_on_the_fine_lines(sim: Simulator, **kwargs):
+        assert sim.model.node_i.shape[0] != fine_nodes, "the fine lines were solved"
+        return solve(sim, **kwargs)
+
+    monkeypatch.setattr(simulation_module, "solve_equilibrium", not_on_the_fine_lines)
+    with pytest.raises(NoEquilibrium) as refused:
+        solve_statics(compile_scene(load_scene("gjoa-500", long_line)), progress=False)
+    assert refused.value.key == "installation.mooring_line_length_m"
+    assert "of its nodes on it" in refused.value.cause and "fast preset" in refused.value.cause
+
+
+def test_one_coarse_fibre_node_on_the_seabed_does_not_refuse_the_scene():
+    """A scene whose coarse equilibrium rests one fibre node on the seabed is solved on its own lines, and there
+    the fibre hangs clear of the seabed (the reference: the fine equilibrium's lowest fibre node, above 0 m)."""
+    from moor_env import Simulator, compile_scene
+    from moor_env.physics.statics_guess import fibre_on_seabed
+
+    model = compile_scene(load_scene("gjoa-500", ONE_COARSE_FIBRE_NODE))
+    coarse = _coarse_start(Simulator(model)).equilibrium()
+    assert fibre_on_seabed(coarse.simulator)[0] == 1
+    result = solve_statics(model, progress=False)
+    resting, lowest_m = fibre_on_seabed(result.simulator)
+    assert resting == 0 and 0.0 < lowest_m < 0.5

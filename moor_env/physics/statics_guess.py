@@ -283,6 +283,33 @@ def change_line_length(state, line: int, delta_m: float) -> None:
     lengths *= 1.0 + delta_m / lengths.sum()
 
 
+def fibre_on_seabed(sim) -> tuple[int, float]:
+    """The mooring line's fibre rope against the seabed in the simulator's state: how many of its nodes lie below
+    the seabed (resting on it) and the height of its lowest node above the seabed [m] (inf without a fibre)."""
+    m = sim.model
+    if "mooring_line" not in m.lines:
+        return 0, math.inf
+    st = sim.state
+    inst = m.scene.installation
+    fibre = m.material_names.index(inst.fibre_material) if inst.fibre_material in m.material_names else -1
+    segs = np.nonzero((st.seg_i[:, L.SI_LINE] == m.lines["mooring_line"].index) & (st.seg_i[:, L.SI_ACTIVE] == 1)
+                      & (st.seg_i[:, L.SI_MAT] == fibre))[0]
+    if segs.size == 0:
+        return 0, math.inf
+    nodes = np.unique(np.concatenate([st.seg_i[segs, L.SI_A], st.seg_i[segs, L.SI_B]]))
+    height = st.node_pos[nodes, 2] + sim.env_f[L.EF_DEPTH]
+    return int(np.count_nonzero(height < 0.0)), float(np.min(height))
+
+
+def fibre_refusal(sim, where: str = "") -> NoEquilibrium:
+    """The refusal of a scene whose fibre rope would rest on the seabed; ``where``: the state it was found in, in
+    words (appended to the cause)."""
+    inst = sim.model.scene.installation
+    return NoEquilibrium("installation.mooring_line_length_m", inst.mooring_line_length_m,
+                         "a shorter line or a larger vessel_spacing_m",
+                         "the fibre rope would rest on the seabed" + (f" ({where})" if where else ""))
+
+
 def check_fibre_clearance(sim) -> None:
     """Refuse an equilibrium in which the mooring line's fibre rope rests on the seabed (it must not touch it).
 
@@ -290,22 +317,8 @@ def check_fibre_clearance(sim) -> None:
     ------
     NoEquilibrium
     """
-    m = sim.model
-    if "mooring_line" not in m.lines:
-        return
-    st = sim.state
-    inst = m.scene.installation
-    fibre = m.material_names.index(inst.fibre_material) if inst.fibre_material in m.material_names else -1
-    segs = np.nonzero((st.seg_i[:, L.SI_LINE] == m.lines["mooring_line"].index) & (st.seg_i[:, L.SI_ACTIVE] == 1)
-                      & (st.seg_i[:, L.SI_MAT] == fibre))[0]
-    if segs.size == 0:
-        return
-    nodes = np.concatenate([st.seg_i[segs, L.SI_A], st.seg_i[segs, L.SI_B]])
-    lowest = float(np.min(st.node_pos[nodes, 2])) + sim.env_f[L.EF_DEPTH]
-    if lowest < 0.0:
-        raise NoEquilibrium("installation.mooring_line_length_m", inst.mooring_line_length_m,
-                            "a shorter line or a larger vessel_spacing_m",
-                            "the fibre rope would rest on the seabed")
+    if fibre_on_seabed(sim)[0] > 0:
+        raise fibre_refusal(sim)
 
 
 @jit

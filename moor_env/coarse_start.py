@@ -1,0 +1,145 @@
+"""The coarse equilibrium of a static solve: the scene's hanging equilibrium at the segment lengths of the
+``COARSE_PRESET`` preset, for lines finer than those (``moor_env.simulation.solve_statics``).
+
+It serves twice, solved at most once per solve (:class:`CoarseStart`):
+
+- **Refusal at once.** Where the first guess lays the fibre rope within ``GUESS_NEAR_SEABED_M`` of the seabed, the
+  coarse equilibrium is solved before the fine lines, and where it rests ``REFUSED_FROM_NODES`` or more fibre nodes
+  on the seabed the scene is refused (:class:`~moor_env.errors.NoEquilibrium`) without solving the fine lines.
+  Why: the fine lines of such a scene mostly do not converge (the fibre lying on the seabed in current is nearly
+  free sideways), so their solve ran into its budgets before the scene was refused. The numbers were measured on
+  the statics benchmark's scenes (``benchmarks/statics.py``, 1000 drawn, seed 0; 876 valid ones with lines finer
+  than the coarse ones): all 110 of those without an equilibrium lay the fibre on the
+  seabed in the calm first guess, 20 of the 757 with one lay it within the trigger; every one of the 91 scenes whose
+  coarse equilibrium rests two or more fibre nodes on the seabed has none on its own lines either. Where it rests
+  one (a 20 m fibre segment touching at one end), 12 scenes have no equilibrium and 7 hang the fibre 1.4-8.5 cm
+  clear on their own lines, so one node decides nothing; with none, no scene is refused for its fibre.
+- **Start.** Where Newton's method does not converge from the first guess, the coarse equilibrium mapped onto the
+  fine lines (:func:`moor_env.remesh.remesh_state`) is a start already in the scene's current and contact; it
+  differs from the fine equilibrium by the sag within each coarse segment (:meth:`CoarseStart.start`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+from moor_env.compile import Model, compile_scene
+from moor_env.errors import MoorEnvError, NoEquilibrium, SimulationDiverged, StaticsNotConverged
+from moor_env.fidelity import fidelity_presets
+from moor_env.physics.statics import MAX_ITERATIONS, solve_equilibrium
+from moor_env.physics.statics_guess import fibre_on_seabed, fibre_refusal
+from moor_env.remesh import remesh_state
+
+if TYPE_CHECKING:
+    from moor_env.simulation import StaticResult
+    from moor_env.simulator import Simulator
+
+COARSE_PRESET = "fast"  # the preset whose segment lengths the coarse compile takes
+FIRST_TRY_ITERATIONS = 200  # Newton iterations from the first guess before the coarse start is tried
+GUESS_NEAR_SEABED_M = 1.0  # a first guess with the fibre this close to the seabed has the coarse solve go first
+REFUSED_FROM_NODES = 2  # fibre nodes of the coarse equilibrium on the seabed that refuse the scene at once
+
+
+@functools.cache
+def _coarse_segments() -> tuple[tuple[str, float], ...]:
+    """The segment lengths of ``COARSE_PRESET`` (read once: every static solve asks)."""
+    return tuple((k, v) for k, v in fidelity_presets()[COARSE_PRESET].items() if k.endswith("_segment_m"))
+
+
+def coarse_keys(model: Model) -> dict | None:
+    """The segment lengths of ``COARSE_PRESET``, or None where the model's lines are no finer."""
+    disc = model.scene.discretization
+    keys = dict(_coarse_segments())
+    return None if all(getattr(disc, k) >= v for k, v in keys.items()) else keys
+
+
+class CoarseStart:
+    """The coarse equilibrium of one static solve of ``sim``, solved on first use.
+
+    ``solve(model, max_iter)`` is the hanging equilibrium of a compiled model without the refusals of an
+    equilibrium (:class:`~moor_env.simulation.StaticResult`): the coarse one is checked here, the fine lines'
+    own equilibrium by the caller.
+    """
+
+    def __init__(self, sim: Simulator, solve: Callable[[Model, int], StaticResult]) -> None:
+        self.sim = sim
+        self.keys = coarse_keys(sim.model)
+        self._solve = solve
+        self._result: StaticResult | None = None
+        self._solved = False
+
+    def equilibrium(self) -> StaticResult | None:
+        """The coarse equilibrium, or None where the lines are no finer than the coarse ones or it is not reached
+        (``MAX_ITERATIONS``); solved on the first call."""
+        if self.keys is None or self._solved:
+            return self._result
+        self._solved = True
+        scene = self.sim.model.scene
+        coarse = scene.model_copy(update={"discretization": scene.discretization.model_copy(update=self.keys)})
+        try:
+            self._result = self._solve(compile_scene(coarse), MAX_ITERATIONS)
+        except (MoorEnvError, ValueError):
+            pass
+        return self._result
+
+    def refuse_fibre_on_seabed(self) -> None:
+        """Refuse the scene at once where the first guess (the simulator's state) lays the fibre rope within
+        ``GUESS_NEAR_SEABED_M`` of the seabed and the coarse equilibrium rests ``REFUSED_FROM_NODES`` or more fibre
+        nodes on it (module docstring).
+
+        Raises
+        ------
+        moor_env.errors.NoEquilibrium
+        """
+        if self.keys is None or fibre_on_seabed(self.sim)[1] > GUESS_NEAR_SEABED_M:
+            return
+        coarse = self.equilibrium()
+        resting = 0 if coarse is None else fibre_on_seabed(coarse.simulator)[0]
+        if resting >= REFUSED_FROM_NODES:
+            raise fibre_refusal(self.sim, f"{resting} of its nodes on it in the equilibrium of the scene at the "
+                                          f"{COARSE_PRESET} preset's segment lengths")
+
+    def start(self, progress: bool):
+        """Solve the fine lines from the coarse equilibrium mapped onto them; the report (iterations of both
+        solves), or None where that start is not to be had (lines no finer than the coarse ones, the coarse scene
+        unsolved, lines that do not map) or Newton's method does not converge from it.
+
+        Raises
+        ------
+        moor_env.errors.NoEquilibrium
+            Where the coarse equilibrium lays the fibre rope on the seabed and the fine lines do not converge from
+            it within ``FIRST_TRY_ITERATIONS``: the scene is refused as the coarse compile refuses it, the cause
+            saying so, at once instead of after a last full solve from the first guess (where fine lines converge
+            from a coarse equilibrium, theirs lies within decimetres of it on the scenes traced, so a fibre resting
+            on the seabed in one rests there in the other unless it barely touches).
+        """
+        coarse = self.equilibrium()
+        if coarse is None:
+            return None
+        sim = self.sim
+        refusal = _fibre_refusal(coarse.simulator, sim)
+        try:
+            sim.state = remesh_state(coarse.simulator.state, coarse.simulator.model, sim.model)
+        except ValueError:  # lines that do not map
+            return None
+        budget = MAX_ITERATIONS if refusal is None else FIRST_TRY_ITERATIONS
+        try:
+            report = solve_equilibrium(sim, warm=True, progress=progress, method="newton", mapped=True,
+                                       max_iter=budget)
+        except MoorEnvError as exc:
+            if refusal is not None and isinstance(exc, (StaticsNotConverged, SimulationDiverged)):
+                raise refusal from None
+            return None
+        return dataclasses.replace(report, iterations=report.iterations + coarse.iterations)
+
+
+def _fibre_refusal(coarse: Simulator, fine: Simulator) -> NoEquilibrium | None:
+    """The refusal of ``fine``'s scene where the coarse equilibrium ``coarse`` rests its fibre rope on the seabed,
+    its cause saying where it was found, or None."""
+    if fibre_on_seabed(coarse)[0] == 0:
+        return None
+    return fibre_refusal(fine, f"in the equilibrium of the scene at the {COARSE_PRESET} preset's segment lengths; "
+                               f"its own lines did not converge within {FIRST_TRY_ITERATIONS} iterations from it")
