@@ -292,11 +292,15 @@ def fibre_on_seabed(sim) -> tuple[int, float]:
     st = sim.state
     inst = m.scene.installation
     fibre = m.material_names.index(inst.fibre_material) if inst.fibre_material in m.material_names else -1
-    segs = np.nonzero((st.seg_i[:, L.SI_LINE] == m.lines["mooring_line"].index) & (st.seg_i[:, L.SI_ACTIVE] == 1)
-                      & (st.seg_i[:, L.SI_MAT] == fibre))[0]
-    if segs.size == 0:
+    line = m.lines["mooring_line"].index
+    start, nseg = st.line_i[line, L.LI_SEG_START], st.line_i[line, L.LI_NSEG]
+    segs = st.seg_i[start:start + nseg]
+    segs = segs[(segs[:, L.SI_ACTIVE] == 1) & (segs[:, L.SI_MAT] == fibre)]
+    if segs.shape[0] == 0:
         return 0, math.inf
-    nodes = np.unique(np.concatenate([st.seg_i[segs, L.SI_A], st.seg_i[segs, L.SI_B]]))
+    nodes = np.zeros(st.node_pos.shape[0], dtype=bool)
+    nodes[segs[:, L.SI_A]] = True
+    nodes[segs[:, L.SI_B]] = True
     height = st.node_pos[nodes, 2] + sim.env_f[L.EF_DEPTH]
     return int(np.count_nonzero(height < 0.0)), float(np.min(height))
 

@@ -31,7 +31,7 @@ from moor_env.physics.statics_system import SLACK_PATIENCE
 
 CHUNK_ITERATIONS = 50
 SHORT_STAGE = 100  # iterations of the first try of the scene's current in one stage
-INCREMENT_ITERATIONS = 400  # iterations of the second try, in increments
+INCREMENT_ITERATIONS = 800  # iterations of the second try, in increments (apply_current)
 STAGE_TOLERANCE = 1e-2  # residual/weight to which a current increment before the last is solved
 STAGE_STEP_M = 1e-2  # and its step
 STAGE_ITERATIONS = 40  # iterations of one current increment before it is retried at a quarter
@@ -137,7 +137,13 @@ def apply_current(stage: Stage, current: float, tol_rel: float, max_iter: int) -
     with the iterations left; True once converged.
 
     Why this order: most scenes take the current in one stage within a few tens of iterations; of those that do
-    not, most reach it in increments within a few hundred, and a few only in one long stage."""
+    not, most reach it in increments within a few hundred, and a few only in one long stage. Why
+    ``INCREMENT_ITERATIONS`` 800: on the statics benchmark's 169 slowest or unsolved scenes, with 400 the increments
+    of some scenes were still advancing when their budget ran out, and the long stage from the calm equilibrium then
+    failed on them (one needed the fallback, 58 s, to be refused for its fibre); with 800 one of them converges, that
+    one and another are refused within 100 ms, six more scenes without an equilibrium are refused 4-12x sooner and
+    no scene loses its equilibrium; with 1200 one scene that only the long stage solves is left too few
+    iterations for it."""
     sim, ctl = stage.sim, stage.ctl
     calm = sim.state.copy()
     calm_age = stage.seg_age.copy()
