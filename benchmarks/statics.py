@@ -185,15 +185,21 @@ def summarize(records: list[dict]) -> dict:
             "with_compile_ms": _quantiles(total),
             "iterations_median": float(np.median([r["iterations"] for r in done])) if done else None,
         }
-    causes: dict = {}
-    for r in records:
-        if r["outcome"] in ("no equilibrium", "needs the fallback", ON_ANCHOR):
-            key = f"{r['outcome']}: {r['cause'].split(' (')[0].split(':')[0]}"
-            causes[key] = causes.get(key, 0) + 1
-    out["causes"] = causes
+    out["causes"], out["cause_ms"] = cause_stats(records)
     out["reference"] = _compare(records)
     out["resting_segments"] = _resting_segments(records)
     return out
+
+
+def cause_stats(records: list[dict]) -> tuple[dict, dict]:
+    """Scenes refused or not solved by Newton's method, by outcome and cause: their count and the quantiles of
+    their solve time [ms]."""
+    times: dict = {}
+    for r in records:
+        if r["outcome"] in ("no equilibrium", "needs the fallback", ON_ANCHOR):
+            key = f"{r['outcome']}: {r['cause'].split(' (')[0].split(':')[0]}"
+            times.setdefault(key, []).append(r["solve_s"] * 1e3)
+    return {k: len(v) for k, v in times.items()}, {k: _quantiles(np.array(v)) for k, v in times.items()}
 
 
 def _resting_segments(records: list[dict]) -> dict:
@@ -270,7 +276,8 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
                   "unsolved on the anchor", "no equilibrium", "refused by config",
                   "median ms", "p90 ms", "p99 ms", "max ms", "median ms with compile", "median iterations"], rows)
     ref = s["reference"]
-    causes = "\n".join(f"- {k}: {v}" for k, v in sorted(s["causes"].items())) or "- none"
+    cause_ms = cause_stats(result["records"])[1]
+    causes = "\n".join(f"- {k}: {v}{_cause_times(cause_ms.get(k))}" for k, v in sorted(s["causes"].items())) or "- none"
     cmp_text = (f"Against the relaxation solver on {ref['scenes']} of the converged scenes: release point within "
                 f"{ref['release_point_max_m'] * 100:.2g} cm, top tensions within "
                 f"{ref['top_tension_max_rel'] * 100:.2g} %; it took {ref['reference_solve_median_s']:.2g} s per scene "
@@ -306,7 +313,8 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
                f"for one equilibrium solve), in the same process."
                if mp.get("scenes") else "No MoorPy comparison in this run.")
     line = run_line(result, COMMAND) + (CLOCK_TEXT if cpu_timed else "")
-    doc = (f"{main}\n\nScenes refused or not solved by Newton's method, by cause:\n\n{causes}\n\n{fb_text}\n\n"
+    doc = (f"{main}\n\nScenes refused or not solved by Newton's method, by cause (time from the compiled scene):"
+           f"\n\n{causes}\n\n{fb_text}\n\n"
            f"{cmp_text}\n\n{mp_text}\n\n" + (f"{seg_text}\n\n" if seg_text else "") + line)
     a = s["all"]
     cpu = " of CPU time" if cpu_timed else ""
@@ -319,6 +327,13 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
               f"(`{COMMAND}`, {result['date'][:10]}; "
               f"[docs/statics.md](docs/statics.md)).")
     return [(DOC, "statics", doc), (README, "statics", readme)]
+
+
+def _cause_times(q: dict | None) -> str:
+    """The time to a refusal or failure of one cause, in words (empty where not recorded)."""
+    if not q:
+        return ""
+    return f" (after {q['median']:.0f} ms median, {q['p90']:.0f} ms p90, {q['max']:.0f} ms at most)"
 
 
 def docs_from_results() -> list[tuple[Path, str, str]]:

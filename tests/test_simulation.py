@@ -275,3 +275,25 @@ def test_one_coarse_fibre_node_on_the_seabed_does_not_refuse_the_scene():
     result = solve_statics(model, progress=False)
     resting, lowest_m = fibre_on_seabed(result.simulator)
     assert resting == 0 and 0.0 < lowest_m < 0.5
+
+
+# The statics benchmark's scene 717 (seed 0), rounded: in strong current its coarse equilibrium needs more than 400
+# iterations of the current's increments, and rests the fibre rope on the seabed.
+CURRENT_IN_LONG_INCREMENTS = {"water_depth_m": 1447.57, "vessel_spacing_m": 623.08, "mooring_line_length_m": 1846.38,
+                              "vertical_chain_length_m": 40.19, "drop_height_m": 52.87, "current_scale": 1.229,
+                              "current_direction_deg": 296.29, "anchor_mass_scale": 1.0305, "fidelity": "default"}
+
+
+def test_scene_whose_current_takes_long_increments_is_refused_without_the_fallback(monkeypatch):
+    """Reference: the relaxation fallback refuses the unrounded scene for its fibre on the seabed (the statics
+    benchmark, 58 s). With the current's
+    increments given ``INCREMENT_ITERATIONS`` before the long stage, Newton's method reaches the coarse equilibrium
+    and the scene is refused from it for the same cause (``method="auto"``, the fallback never runs)."""
+    from moor_env.errors import NoEquilibrium
+    from moor_env.physics import statics_relaxation
+
+    monkeypatch.setattr(statics_relaxation, "solve_equilibrium", lambda *a, **k: pytest.fail("the fallback ran"))
+    with pytest.raises(NoEquilibrium) as refused:
+        solve_statics(load_scene("gjoa-500", CURRENT_IN_LONG_INCREMENTS), progress=False)
+    assert refused.value.key == "installation.mooring_line_length_m"
+    assert refused.value.cause.startswith("the fibre rope would rest on the seabed")
