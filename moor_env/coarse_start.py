@@ -7,13 +7,14 @@ It serves twice, solved at most once per solve (:class:`CoarseStart`):
   coarse equilibrium is solved before the fine lines, and where it rests ``REFUSED_FROM_NODES`` or more fibre nodes
   on the seabed the scene is refused (:class:`~moor_env.errors.NoEquilibrium`) without solving the fine lines.
   Why: the fine lines of such a scene mostly do not converge (the fibre lying on the seabed in current is nearly
-  free sideways), so their solve ran into its budgets before the scene was refused. The numbers were measured on
-  the statics benchmark's scenes (``benchmarks/statics.py``, 1000 drawn, seed 0; 876 valid ones with lines finer
-  than the coarse ones): all 110 of those without an equilibrium lay the fibre on the
-  seabed in the calm first guess, 20 of the 757 with one lay it within the trigger; every one of the 91 scenes whose
-  coarse equilibrium rests two or more fibre nodes on the seabed has none on its own lines either. Where it rests
-  one (a 20 m fibre segment touching at one end), 12 scenes have no equilibrium and 7 hang the fibre 1.4-8.5 cm
-  clear on their own lines, so one node decides nothing; with none, no scene is refused for its fibre.
+  free sideways), so a solve of them runs into its budgets before the scene is refused. The numbers were measured on
+  the statics benchmark's scenes (``benchmarks/statics.py``, 1000 drawn, seed 0), of which 876 are valid with lines
+  finer than the coarse ones: 758 converge, 112 have no equilibrium, 6 are unsolved. All 112 lay the fibre on the
+  seabed in the calm first guess, against 20 of the 758 within the trigger. The 98 scenes whose coarse equilibrium
+  rests two or more fibre nodes on the seabed all have no equilibrium; of the 19 that rest one (a 20 m fibre
+  segment touching at one end), 12 have none and 7 converge with the fibre 1.4-8.5 cm clear on their own lines, so
+  one node decides nothing; where it rests none, no scene is refused for its fibre (the other 2 without an
+  equilibrium are scenes whose coarse solve does not converge).
 - **Start.** Where Newton's method does not converge from the first guess, the coarse equilibrium mapped onto the
   fine lines (:func:`moor_env.remesh.remesh_state`) is a start already in the scene's current and contact; it
   differs from the fine equilibrium by the sag within each coarse segment (:meth:`CoarseStart.start`).
@@ -30,7 +31,7 @@ from moor_env.compile import Model, compile_scene
 from moor_env.errors import MoorEnvError, NoEquilibrium, SimulationDiverged, StaticsNotConverged
 from moor_env.fidelity import fidelity_presets
 from moor_env.physics.statics import MAX_ITERATIONS, solve_equilibrium
-from moor_env.physics.statics_guess import fibre_on_seabed, fibre_refusal
+from moor_env.physics.statics_checks import fibre_on_seabed, fibre_refusal
 from moor_env.remesh import remesh_state
 
 if TYPE_CHECKING:
@@ -59,12 +60,12 @@ def coarse_keys(model: Model) -> dict | None:
 class CoarseStart:
     """The coarse equilibrium of one static solve of ``sim``, solved on first use.
 
-    ``solve(model, max_iter)`` is the hanging equilibrium of a compiled model without the refusals of an
+    ``solve(model)`` is the hanging equilibrium of a compiled model without the refusals of an
     equilibrium (:class:`~moor_env.simulation.StaticResult`): the coarse one is checked here, the fine lines'
     own equilibrium by the caller.
     """
 
-    def __init__(self, sim: Simulator, solve: Callable[[Model, int], StaticResult]) -> None:
+    def __init__(self, sim: Simulator, solve: Callable[[Model], StaticResult]) -> None:
         self.sim = sim
         self.keys = coarse_keys(sim.model)
         self._solve = solve
@@ -72,15 +73,15 @@ class CoarseStart:
         self._solved = False
 
     def equilibrium(self) -> StaticResult | None:
-        """The coarse equilibrium, or None where the lines are no finer than the coarse ones or it is not reached
-        (``MAX_ITERATIONS``); solved on the first call."""
+        """The coarse equilibrium, or None where the lines are no finer than the coarse ones or it is not reached;
+        solved on the first call."""
         if self.keys is None or self._solved:
             return self._result
         self._solved = True
         scene = self.sim.model.scene
         coarse = scene.model_copy(update={"discretization": scene.discretization.model_copy(update=self.keys)})
         try:
-            self._result = self._solve(compile_scene(coarse), MAX_ITERATIONS)
+            self._result = self._solve(compile_scene(coarse))
         except (MoorEnvError, ValueError):
             pass
         return self._result

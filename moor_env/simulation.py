@@ -24,13 +24,9 @@ from moor_env.physics import layout as L
 from moor_env.physics.anchor import tilt_deg
 from moor_env.physics.integrate import INTEGRATOR_IMPLICIT_EULER, INTEGRATOR_RK2, INTEGRATOR_SYMPLECTIC_EULER
 from moor_env.physics.records import STATE_NAMES, SimState
-from moor_env.physics.statics import MAX_ITERATIONS, solve_equilibrium
-from moor_env.physics.statics_guess import (
-    change_line_length,
-    check_anchor_clearance,
-    check_fibre_clearance,
-    first_guess,
-)
+from moor_env.physics.statics import MAX_ITERATIONS, n_static_dofs, solve_equilibrium
+from moor_env.physics.statics_checks import check_anchor_clearance, check_fibre_clearance
+from moor_env.physics.statics_guess import change_line_length, first_guess
 from moor_env.simulator import Simulator, integrator_code
 
 STATE_ARRAY_FIELDS = STATE_NAMES  # the arrays of a SimState, in order
@@ -67,12 +63,13 @@ def _adjust_to_drop_height(sim: Simulator, target_z: float) -> float:
     return float(tip[2] - target_z)
 
 
-def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool, max_iter: int = MAX_ITERATIONS):
-    """:func:`solve_equilibrium` by ``method`` within ``max_iter`` Newton iterations. Where the lines are finer than
-    the coarse start's (``moor_env.coarse_start``), a scene whose fibre rope the coarse equilibrium lays on the
-    seabed is refused first (where ``checks``); then Newton's method from the first guess gets
+def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool):
+    """:func:`solve_equilibrium` by ``method``. Where the lines are finer than the coarse start's
+    (``moor_env.coarse_start``) and ``checks``, a scene whose first guess lays the fibre rope near the seabed and
+    whose coarse equilibrium rests several fibre nodes on it is refused first
+    (:meth:`CoarseStart.refuse_fibre_on_seabed`); then Newton's method from the first guess gets
     ``FIRST_TRY_ITERATIONS``, then the coarse start (:meth:`CoarseStart.start`), then the first guess again with
-    the full budget; the relaxation fallback last.
+    ``MAX_ITERATIONS``; the relaxation fallback last.
 
     Why that order: a solve from the first guess that has not converged in a few hundred iterations mostly
     stalls (with the loop resting against the anchor in current); from the coarse start most of those converge
@@ -81,11 +78,11 @@ def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool, max_
     if method == "relaxation":
         return solve_equilibrium(sim, progress=progress, method=method)
     coarse = CoarseStart(sim, functools.partial(_coarse_solve, progress=progress))
-    guessed = checks and coarse.keys is not None
+    guessed = checks and coarse.keys is not None and n_static_dofs(sim) > 0
     if guessed:  # the first try starts from this guess
         first_guess(sim)
         coarse.refuse_fibre_on_seabed()
-    budgets = (FIRST_TRY_ITERATIONS, max_iter) if coarse.keys is not None else (max_iter,)
+    budgets = (FIRST_TRY_ITERATIONS, MAX_ITERATIONS) if coarse.keys is not None else (MAX_ITERATIONS,)
     failure = None
     for k, budget in enumerate(budgets):
         if k > 0:
@@ -104,10 +101,10 @@ def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool, max_
     return solve_equilibrium(sim, progress=progress, method="relaxation")
 
 
-def _coarse_solve(model: Model, max_iter: int, progress: bool) -> StaticResult:
+def _coarse_solve(model: Model, progress: bool) -> StaticResult:
     """The coarse start's solve: the hanging equilibrium of a coarse compile by Newton's method, without the
     refusals of an equilibrium (the fine lines' own equilibrium is checked)."""
-    return _hanging_equilibrium(model, 1e-3, progress, "newton", checks=False, max_iter=max_iter)
+    return _hanging_equilibrium(model, 1e-3, progress, "newton", checks=False)
 
 
 def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: bool = True,
@@ -119,6 +116,8 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: boo
     anchor tip hangs ``drop_height_m`` above the seabed within ``tol_m``; without a wire, the held chain top
     is moved instead. ``method``: "auto" (Newton's method, and the slow relaxation solver where it does not
     converge), "newton" or "relaxation" (one of them only; :func:`moor_env.physics.statics.solve_equilibrium`).
+    With "auto" and "newton", a scene whose fibre rope the scene's coarse equilibrium lays on the seabed is refused
+    before its own lines are solved (``moor_env.coarse_start``).
 
     Raises
     ------
@@ -132,14 +131,14 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: boo
 
 
 def _hanging_equilibrium(model: Model, tol_m: float, progress: bool, method: str, checks: bool,
-                         t0: float | None = None, max_iter: int = MAX_ITERATIONS) -> StaticResult:
+                         t0: float | None = None) -> StaticResult:
     """:func:`solve_statics` of a compiled model; ``checks`` False skips the refusals of an equilibrium (fibre on
     the seabed, a line through the anchor): the coarse start maps such an equilibrium too, and the fine lines'
     own equilibrium is then checked. ``t0``: the ``time.perf_counter`` the wall time counts from (the compile
     included where given)."""
     t0 = time.perf_counter() if t0 is None else t0
     sim = Simulator(model)
-    report = _equilibrium(sim, progress, method, checks, max_iter)
+    report = _equilibrium(sim, progress, method, checks)
     iterations = report.iterations
     finished = report.method
     sc = model.scene

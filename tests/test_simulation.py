@@ -243,7 +243,7 @@ def test_fibre_the_coarse_equilibrium_lays_on_the_seabed_is_refused_before_the_f
     from moor_env import Simulator, compile_scene
     from moor_env import simulation as simulation_module
     from moor_env.errors import NoEquilibrium
-    from moor_env.physics.statics_guess import fibre_on_seabed
+    from moor_env.physics.statics_checks import fibre_on_seabed
 
     long_line = {"mooring_line_length_m": 750.0, "vessel_spacing_m": 60.0, "current_scale": 0.0}
     model = compile_scene(load_scene("gjoa-500", long_line))
@@ -264,12 +264,18 @@ def test_fibre_the_coarse_equilibrium_lays_on_the_seabed_is_refused_before_the_f
 
 
 def test_one_coarse_fibre_node_on_the_seabed_does_not_refuse_the_scene():
-    """A scene whose coarse equilibrium rests one fibre node on the seabed is solved on its own lines, and there
-    the fibre hangs clear of the seabed (the reference: the fine equilibrium's lowest fibre node, above 0 m)."""
+    """A scene whose first guess lays the fibre rope near the seabed and whose coarse equilibrium rests one fibre
+    node on it is solved on its own lines, and there the fibre hangs clear of the seabed (the reference: the fine
+    equilibrium's lowest fibre node, above 0 m)."""
     from moor_env import Simulator, compile_scene
-    from moor_env.physics.statics_guess import fibre_on_seabed
+    from moor_env.coarse_start import GUESS_NEAR_SEABED_M
+    from moor_env.physics.statics_checks import fibre_on_seabed
+    from moor_env.physics.statics_guess import first_guess
 
     model = compile_scene(load_scene("gjoa-500", ONE_COARSE_FIBRE_NODE))
+    guess = Simulator(model)
+    first_guess(guess)
+    assert fibre_on_seabed(guess)[1] <= GUESS_NEAR_SEABED_M
     coarse = _coarse_start(Simulator(model)).equilibrium()
     assert fibre_on_seabed(coarse.simulator)[0] == 1
     result = solve_statics(model, progress=False)
@@ -286,9 +292,9 @@ CURRENT_IN_LONG_INCREMENTS = {"water_depth_m": 1447.57, "vessel_spacing_m": 623.
 
 def test_scene_whose_current_takes_long_increments_is_refused_without_the_fallback(monkeypatch):
     """Reference: the relaxation fallback refuses the unrounded scene for its fibre on the seabed (the statics
-    benchmark, 58 s). With the current's
-    increments given ``INCREMENT_ITERATIONS`` before the long stage, Newton's method reaches the coarse equilibrium
-    and the scene is refused from it for the same cause (``method="auto"``, the fallback never runs)."""
+    benchmark, 58 s). With the current's increments given ``INCREMENT_ITERATIONS`` before the long stage, Newton's
+    method reaches the coarse equilibrium and the scene is refused from it for the same cause (``method="auto"``,
+    the fallback never runs)."""
     from moor_env.errors import NoEquilibrium
     from moor_env.physics import statics_relaxation
 
@@ -297,3 +303,24 @@ def test_scene_whose_current_takes_long_increments_is_refused_without_the_fallba
         solve_statics(load_scene("gjoa-500", CURRENT_IN_LONG_INCREMENTS), progress=False)
     assert refused.value.key == "installation.mooring_line_length_m"
     assert refused.value.cause.startswith("the fibre rope would rest on the seabed")
+    assert "fast preset" in refused.value.cause
+
+
+def test_first_try_from_the_guess_made_before_it_is_the_solve_from_the_guess():
+    """``solve_statics`` makes the first guess itself (to look at the fibre) and starts the first Newton try from
+    it without a new guess; reference: the solve that makes its own guess, on a scene in current with the loop
+    resting on the anchor (the contact solve restarts from the start state). Iterations and node positions agree
+    bit for bit."""
+    from moor_env import Simulator, compile_scene
+    from moor_env.physics.statics import solve_equilibrium
+    from moor_env.physics.statics_guess import first_guess
+
+    model = compile_scene(load_scene("gjoa-500", LOOP_ON_ANCHOR_IN_CURRENT))
+    own = Simulator(model)
+    own_report = solve_equilibrium(own, progress=False, method="newton")
+    given = Simulator(model)
+    first_guess(given)
+    given_report = solve_equilibrium(given, progress=False, method="newton", analytic_guess=False)
+    assert given_report.iterations == own_report.iterations
+    assert np.array_equal(given.state.node_pos, own.state.node_pos)
+    assert np.array_equal(given.state.body_state, own.state.body_state)

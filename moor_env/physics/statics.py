@@ -38,7 +38,8 @@ from tqdm.auto import tqdm
 from moor_env.errors import ConfigError, SimulationDiverged, StaticsNotConverged
 from moor_env.physics import layout as L
 from moor_env.physics import statics_relaxation
-from moor_env.physics.statics_guess import anchor_intrusion, first_guess
+from moor_env.physics.statics_checks import anchor_intrusion
+from moor_env.physics.statics_guess import first_guess
 from moor_env.physics.statics_newton import (
     C_ITERATIONS,
     C_MAX_STEP,

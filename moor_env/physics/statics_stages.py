@@ -138,12 +138,12 @@ def apply_current(stage: Stage, current: float, tol_rel: float, max_iter: int) -
 
     Why this order: most scenes take the current in one stage within a few tens of iterations; of those that do
     not, most reach it in increments within a few hundred, and a few only in one long stage. Why
-    ``INCREMENT_ITERATIONS`` 800: on the statics benchmark's 169 slowest or unsolved scenes, with 400 the increments
-    of some scenes were still advancing when their budget ran out, and the long stage from the calm equilibrium then
-    failed on them (one needed the fallback, 58 s, to be refused for its fibre); with 800 one of them converges, that
-    one and another are refused within 100 ms, six more scenes without an equilibrium are refused 4-12x sooner and
-    no scene loses its equilibrium; with 1200 one scene that only the long stage solves is left too few
-    iterations for it."""
+    ``INCREMENT_ITERATIONS`` 800: in strong current the increments of some scenes are still advancing after
+    several hundred iterations, and the long stage from the calm equilibrium fails where they are cut off. On the
+    statics benchmark's 169 slowest or unsolved scenes, 800 against 400 solves one more scene, refuses two more
+    for their fibre within 100 ms (with 400, one of them needs the relaxation fallback, 58 s, to be refused) and
+    refuses six others 4-12x sooner, with no scene losing its equilibrium; 1200 leaves too few iterations to one
+    scene that only the long stage solves."""
     sim, ctl = stage.sim, stage.ctl
     calm = sim.state.copy()
     calm_age = stage.seg_age.copy()

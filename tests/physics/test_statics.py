@@ -303,7 +303,7 @@ def test_anchor_clearance_depth_is_the_surface_distance():
     """Reference: the anchor's surface (gjoa-500: one cylinder of radius 0.6 m, 13 m long); a node on the axis at
     the cylinder's middle lies inside by the radius, one a metre beside it lies outside (depth 0). Tolerance
     1e-9 m."""
-    from moor_env.physics.statics_guess import deepest_inside_anchor
+    from moor_env.physics.statics_checks import deepest_inside_anchor
 
     sim = solve_statics(load_scene("gjoa-500", {"fidelity": "fast"}), progress=False).simulator
     shape = sim.model.contact_shape

@@ -14,7 +14,7 @@ import pytest
 from moor_env import load_scene, solve_statics
 from moor_env.errors import NoEquilibrium, StaticsNotConverged
 from moor_env.physics import layout as L
-from moor_env.physics.statics_guess import ANCHOR_CLEARANCE_M, anchor_intrusion
+from moor_env.physics.statics_checks import ANCHOR_CLEARANCE_M, anchor_intrusion
 from tests.physics.test_statics import _residual_ratio
 
 RESTING = [
@@ -205,7 +205,7 @@ def test_clearance_check_after_each_solver():
     from moor_env import Simulator
     from moor_env.compile import compile_scene
     from moor_env.physics.statics import solve_newton
-    from moor_env.physics.statics_guess import check_anchor_clearance
+    from moor_env.physics.statics_checks import check_anchor_clearance
 
     sim = Simulator(compile_scene(load_scene("gjoa-500", RESTING[0])))
     solve_newton(sim, progress=False, contact=False)
