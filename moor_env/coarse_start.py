@@ -17,7 +17,12 @@ It serves twice, solved at most once per solve (:class:`CoarseStart`):
   equilibrium are scenes whose coarse solve does not converge).
 - **Start.** Where Newton's method does not converge from the first guess, the coarse equilibrium mapped onto the
   fine lines (:func:`moor_env.remesh.remesh_state`) is a start already in the scene's current and contact; it
-  differs from the fine equilibrium by the sag within each coarse segment (:meth:`CoarseStart.start`).
+  differs from the fine equilibrium by the sag within each coarse segment (:meth:`CoarseStart.start`). Where the
+  fine lines do not converge from it either and they are finer than ``MIDDLE_PRESET``'s, the equilibrium at that
+  preset's segment lengths (itself solved from the coarse one where needed) is the next start. Why: on the
+  statics benchmark, four of the six scenes left unsolved with the loop resting on the anchor in current had
+  accurate-preset lines whose solve from the fast preset's equilibrium stalled; from the default preset's, three of
+  them converge.
 """
 
 from __future__ import annotations
@@ -39,35 +44,38 @@ if TYPE_CHECKING:
     from moor_env.simulator import Simulator
 
 COARSE_PRESET = "fast"  # the preset whose segment lengths the coarse compile takes
+MIDDLE_PRESET = "default"  # the second start's, for lines finer than its own (CoarseStart.start)
 FIRST_TRY_ITERATIONS = 200  # Newton iterations from the first guess before the coarse start is tried
 GUESS_NEAR_SEABED_M = 1.0  # a first guess with the fibre this close to the seabed has the coarse solve go first
 REFUSED_FROM_NODES = 2  # fibre nodes of the coarse equilibrium on the seabed that refuse the scene at once
 
 
 @functools.cache
-def _coarse_segments() -> tuple[tuple[str, float], ...]:
-    """The segment lengths of ``COARSE_PRESET`` (read once: every static solve asks)."""
-    return tuple((k, v) for k, v in fidelity_presets()[COARSE_PRESET].items() if k.endswith("_segment_m"))
+def _segments(preset: str) -> tuple[tuple[str, float], ...]:
+    """The segment lengths of a preset (read once: every static solve asks)."""
+    return tuple((k, v) for k, v in fidelity_presets()[preset].items() if k.endswith("_segment_m"))
 
 
-def coarse_keys(model: Model) -> dict | None:
-    """The segment lengths of ``COARSE_PRESET``, or None where the model's lines are no finer."""
+def coarse_keys(model: Model, preset: str = COARSE_PRESET) -> dict | None:
+    """The segment lengths of ``preset``, or None where the model's lines are no finer."""
     disc = model.scene.discretization
-    keys = dict(_coarse_segments())
+    keys = dict(_segments(preset))
     return None if all(getattr(disc, k) >= v for k, v in keys.items()) else keys
 
 
 class CoarseStart:
-    """The coarse equilibrium of one static solve of ``sim``, solved on first use.
+    """The coarse equilibrium of one static solve of ``sim`` (at the segment lengths of ``preset``), solved on first
+    use.
 
     ``solve(model)`` is the hanging equilibrium of a compiled model without the refusals of an
     equilibrium (:class:`~moor_env.simulation.StaticResult`): the coarse one is checked here, the fine lines'
     own equilibrium by the caller.
     """
 
-    def __init__(self, sim: Simulator, solve: Callable[[Model], StaticResult]) -> None:
+    def __init__(self, sim: Simulator, solve: Callable[[Model], StaticResult], preset: str = COARSE_PRESET) -> None:
         self.sim = sim
-        self.keys = coarse_keys(sim.model)
+        self.preset = preset
+        self.keys = coarse_keys(sim.model, preset)
         self._solve = solve
         self._result: StaticResult | None = None
         self._solved = False
@@ -101,7 +109,7 @@ class CoarseStart:
         resting = 0 if coarse is None else fibre_on_seabed(coarse.simulator)[0]
         if resting >= REFUSED_FROM_NODES:
             raise fibre_refusal(self.sim, f"{resting} of its nodes on it in the equilibrium of the scene at the "
-                                          f"{COARSE_PRESET} preset's segment lengths")
+                                          f"{self.preset} preset's segment lengths")
 
     def start(self, progress: bool):
         """Solve the fine lines from the coarse equilibrium mapped onto them; the report (iterations of both
@@ -121,7 +129,7 @@ class CoarseStart:
         if coarse is None:
             return None
         sim = self.sim
-        refusal = _fibre_refusal(coarse.simulator, sim)
+        refusal = _fibre_refusal(coarse.simulator, sim, self.preset)
         try:
             sim.state = remesh_state(coarse.simulator.state, coarse.simulator.model, sim.model)
         except ValueError:  # lines that do not map
@@ -137,10 +145,10 @@ class CoarseStart:
         return dataclasses.replace(report, iterations=report.iterations + coarse.iterations)
 
 
-def _fibre_refusal(coarse: Simulator, fine: Simulator) -> NoEquilibrium | None:
-    """The refusal of ``fine``'s scene where the coarse equilibrium ``coarse`` rests its fibre rope on the seabed,
-    its cause saying where it was found, or None."""
+def _fibre_refusal(coarse: Simulator, fine: Simulator, preset: str) -> NoEquilibrium | None:
+    """The refusal of ``fine``'s scene where the coarse equilibrium ``coarse`` (at ``preset``'s segment lengths)
+    rests its fibre rope on the seabed, its cause saying where it was found, or None."""
     if fibre_on_seabed(coarse)[0] == 0:
         return None
-    return fibre_refusal(fine, f"in the equilibrium of the scene at the {COARSE_PRESET} preset's segment lengths; "
+    return fibre_refusal(fine, f"in the equilibrium of the scene at the {preset} preset's segment lengths; "
                                f"its own lines did not converge within {FIRST_TRY_ITERATIONS} iterations from it")

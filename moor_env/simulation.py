@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from tqdm.auto import tqdm
 
-from moor_env.coarse_start import FIRST_TRY_ITERATIONS, CoarseStart
+from moor_env.coarse_start import FIRST_TRY_ITERATIONS, MIDDLE_PRESET, CoarseStart
 from moor_env.compile import VESSEL_SECOND, Model, compile_scene
 from moor_env.config import SceneConfig, load_scene
 from moor_env.errors import StaticsNotConverged
@@ -68,8 +68,9 @@ def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool):
     (``moor_env.coarse_start``) and ``checks``, a scene whose first guess lays the fibre rope near the seabed and
     whose coarse equilibrium rests several fibre nodes on it is refused first
     (:meth:`CoarseStart.refuse_fibre_on_seabed`); then Newton's method from the first guess gets
-    ``FIRST_TRY_ITERATIONS``, then the coarse start (:meth:`CoarseStart.start`), then the first guess again with
-    ``MAX_ITERATIONS``; the relaxation fallback last.
+    ``FIRST_TRY_ITERATIONS``, then the coarse start (:meth:`CoarseStart.start`, the fast preset's equilibrium, then
+    the default preset's for lines finer than that), then the first guess again with ``MAX_ITERATIONS``; the
+    relaxation fallback last.
 
     Why that order: a solve from the first guess that has not converged in a few hundred iterations mostly
     stalls (with the loop resting against the anchor in current); from the coarse start most of those converge
@@ -77,7 +78,8 @@ def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool):
     it costs more than the first guess (its compile and solve, and tens of Newton iterations for the sag)."""
     if method == "relaxation":
         return solve_equilibrium(sim, progress=progress, method=method)
-    coarse = CoarseStart(sim, functools.partial(_coarse_solve, progress=progress))
+    solve = functools.partial(_coarse_solve, progress=progress)
+    coarse = CoarseStart(sim, solve)
     guessed = checks and coarse.keys is not None and n_static_dofs(sim) > 0
     if guessed:  # the first try starts from this guess
         first_guess(sim)
@@ -87,6 +89,8 @@ def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool):
     for k, budget in enumerate(budgets):
         if k > 0:
             report = coarse.start(progress)
+            if report is None:
+                report = CoarseStart(sim, solve, MIDDLE_PRESET).start(progress)
             if report is not None:
                 return report
             sim.state = sim.model.initial_state()

@@ -324,3 +324,28 @@ def test_first_try_from_the_guess_made_before_it_is_the_solve_from_the_guess():
     assert given_report.iterations == own_report.iterations
     assert np.array_equal(given.state.node_pos, own.state.node_pos)
     assert np.array_equal(given.state.body_state, own.state.body_state)
+
+
+# The statics benchmark's scene 818 (seed 0), as drawn: accurate lines, the loop against the anchor in current.
+LOOP_ON_ANCHOR_ACCURATE = {"water_depth_m": 589.0699279300381, "vessel_spacing_m": 7.147694530877383,
+                           "mooring_line_length_m": 625.2230721776377, "vertical_chain_length_m": 38.876581418505495,
+                           "drop_height_m": 61.2644861599026, "current_scale": 0.9943416996816268,
+                           "current_direction_deg": 150.75864856403774, "anchor_mass_scale": 0.9227355562656728,
+                           "fidelity": "accurate"}
+
+
+def test_middle_start_solves_lines_the_fast_start_does_not():
+    """Reference: the solver's tolerance on the discrete model's residual (1e-4 of each node's weight). On this
+    scene Newton's method does not converge from the fast preset's equilibrium mapped onto the accurate lines; from
+    the default preset's it does, and ``solve_statics`` finds the equilibrium that way."""
+    from moor_env import Simulator, compile_scene
+    from moor_env.coarse_start import MIDDLE_PRESET, CoarseStart
+    from moor_env.simulation import _coarse_solve
+
+    model = compile_scene(load_scene("gjoa-500", LOOP_ON_ANCHOR_ACCURATE))
+    assert _coarse_start(Simulator(model)).start(progress=False) is None
+    sim = Simulator(model)
+    assert CoarseStart(sim, functools.partial(_coarse_solve, progress=False), MIDDLE_PRESET).start(False) is not None
+    assert _largest_residual_ratio(sim) < 1e-4
+    result = solve_statics(model, progress=False)
+    assert _largest_residual_ratio(result.simulator) < 1e-4
