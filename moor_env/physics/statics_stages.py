@@ -142,7 +142,7 @@ def apply_current(stage: Stage, current: float, tol_rel: float, max_iter: int) -
     several hundred iterations, and the long stage from the calm equilibrium fails where they are cut off. On the
     statics benchmark's 169 slowest or unsolved scenes, 800 against 400 solves one more scene, refuses two more
     for their fibre within 100 ms (with 400, one of them needs the relaxation fallback, 58 s, to be refused) and
-    refuses six others 4-12x sooner, with no scene losing its equilibrium; 1200 leaves too few iterations to one
+    refuses six others 4-15x sooner, with no scene losing its equilibrium; 1200 leaves too few iterations to one
     scene that only the long stage solves."""
     sim, ctl = stage.sim, stage.ctl
     calm = sim.state.copy()
