@@ -284,9 +284,9 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
                 f"(median), {ref['speedup_median']:.0f}x the Newton solver's time (least {ref['speedup_min']:.0f}x)."
                 if ref.get("scenes") else "No relaxation-solver comparison in this run.")
     seg = s.get("resting_segments", {})
-    seg_text = (f"The contact acts on the nodes; a straight segment between two of them can still cut into the "
-                f"anchor: over the {seg['scenes']} scenes resting on it the deepest point of a segment lies "
-                f"{seg['median_m'] * 1e3:.0f} mm inside (median), {seg['max_m'] * 1e3:.0f} mm at most, more than "
+    seg_text = (f"The contact acts on the nodes and on segments that cut in deeper than their nodes (a chain over "
+                f"a rim): over the {seg['scenes']} scenes resting on the anchor the deepest point of a segment lies "
+                f"{seg['median_m'] * 1e3:.2g} mm inside (median), {seg['max_m'] * 1e3:.2g} mm at most, more than "
                 f"5 cm in {seg['deeper_than_5cm']}."
                 if seg.get("scenes") else "")
     fb = s["fallback"]

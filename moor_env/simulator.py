@@ -282,9 +282,8 @@ class Simulator:
     def deepest_segment_inside_m(self) -> float:
         """How deep the deepest point of any line lies inside the anchor's surface now, segment interiors included
         [m] (0 where none does, without an anchor, or where the scene does not model the contact, whose surface
-        it measures): the contact acts on nodes, and a segment between two nodes
-        outside the surface can still cut across an edge of the anchor
-        (:func:`moor_env.physics.anchor_surface.deepest_segment_point`)."""
+        it measures; :func:`moor_env.physics.anchor_surface.deepest_segment_point`). The contact holds nodes and
+        segments out to within its penalty's depth (``physics/contact.py``, ``physics/segment_contact.py``)."""
         if not self.model.body_active:
             return 0.0
         st = self.state

@@ -35,7 +35,9 @@ and the friction's dependence on the normal force; checked against central diffe
 fixed. The implicit step (``implicit_contact.py``) takes their symmetric, positive part: k n n^T and the damping.
 The static solver takes k n n^T and its coupling to the anchor (``statics_contact.py``).
 
-The numbers (stiffness, restitution, friction) and the shape are chosen in ``physics/contact_setup.py``.
+The numbers (stiffness, restitution, friction) and the shape are chosen in ``physics/contact_setup.py``; the
+contact of segments that cut into the anchor deeper than their nodes is ``physics/segment_contact.py``, with this
+law (:func:`law_at`).
 """
 
 from __future__ import annotations
@@ -93,10 +95,22 @@ def _law(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f):
     if within_reach(px, py, pz, body_state, shape):
         sd, nx, ny, nz, hxx, hyy, hzz, hxy, hxz, hyz, _ = surface_distance(px, py, pz, body_state, shape)
     depth = -sd if sd < 0.0 else 0.0
+    wx, wy, wz = relative_velocity(px, py, pz, vx, vy, vz, body_state)
+    fx, fy, fz, wn, fn, k, c, mu, tx, ty, tz, st, normal, g, sliding, viscous_from_n = law_at(
+        depth, nx, ny, nz, wx, wy, wz, mass_kg, contact_f)
+    return (depth, fx, fy, fz, nx, ny, nz, hxx, hyy, hzz, hxy, hxz, hyz, wx, wy, wz, wn, fn, k, c, mu, tx, ty, tz,
+            st, normal, g, sliding, viscous_from_n)
+
+
+@jit
+def law_at(depth, nx, ny, nz, wx, wy, wz, mass_kg, contact_f):
+    """The contact law at a point ``depth`` [m] inside the surface (0: outside) with outward normal n and velocity
+    w relative to the body's point there [m/s], for a mass ``mass_kg`` [kg] (module docstring): the force
+    (fx, fy, fz) [N], then what its Jacobian needs (w.n, f_n, k, c, mu, w_t, |w_t|, N, the friction's factor g,
+    sliding, whether the viscous slope follows N)."""
     k = contact_f[CF_STIFFNESS]
     c = 2.0 * contact_f[CF_ZETA] * math.sqrt(k * mass_kg)
     mu = contact_f[CF_MU]
-    wx, wy, wz = relative_velocity(px, py, pz, vx, vy, vz, body_state)
     wn = wx * nx + wy * ny + wz * nz
     fn = k * depth - c * wn if depth > 0.0 else 0.0
     tx = wx - wn * nx
@@ -116,8 +130,8 @@ def _law(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f):
         if slope * st > mu * normal:
             sliding = True
     g = mu * normal / st if sliding else slope
-    return (depth, fn * nx - g * tx, fn * ny - g * ty, fn * nz - g * tz, nx, ny, nz, hxx, hyy, hzz, hxy, hxz, hyz,
-            wx, wy, wz, wn, fn, k, c, mu, tx, ty, tz, st, normal, g, sliding, viscous_from_n)
+    return (fn * nx - g * tx, fn * ny - g * ty, fn * nz - g * tz, wn, fn, k, c, mu, tx, ty, tz, st, normal, g,
+            sliding, viscous_from_n)
 
 
 @jit
@@ -232,8 +246,9 @@ def add_contact_reaction(load, body_state, px, py, pz, fx, fy, fz):
 @jit
 def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_state, shape, contact_f, contact_out,
                       seabed_z):
-    """Add the contact force of every free node inside the anchor to ``node_force`` and fill ``contact_out``
-    (``CO_*``); returns the reaction on the anchor (F [N], M about the COG [N m]) as six floats.
+    """Add the contact force of every free node inside the anchor to ``node_force`` and record the nodes inside in
+    ``contact_out`` (``CO_NODES``, ``CO_DEPTH``, ``CO_PEAK_DEPTH``; the force: :func:`record_contact_force`);
+    returns the reaction on the anchor (F [N], M about the COG [N m]) as six floats.
 
     The node's mass in the damping is its structural mass (``node_mass``, welded parts included); its added mass
     (a few % for chain) only makes the contact slightly softer and less damped than chosen. Nodes below the seabed
@@ -272,10 +287,15 @@ def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_st
         mx += ax
         my += ay
         mz += az
-    force = math.sqrt(lx * lx + ly * ly + lz * lz)
-    contact_out[CO_FORCE] = force
-    contact_out[CO_PEAK_FORCE] = max(contact_out[CO_PEAK_FORCE], force)
     contact_out[CO_NODES] = count
     contact_out[CO_DEPTH] = deepest
     contact_out[CO_PEAK_DEPTH] = max(contact_out[CO_PEAK_DEPTH], deepest)
     return lx, ly, lz, mx, my, mz
+
+
+@jit
+def record_contact_force(contact_out, fx, fy, fz):
+    """Record the net contact force on the anchor (F [N]) and its running peak in ``contact_out``."""
+    force = math.sqrt(fx * fx + fy * fy + fz * fz)
+    contact_out[CO_FORCE] = force
+    contact_out[CO_PEAK_FORCE] = max(contact_out[CO_PEAK_FORCE], force)

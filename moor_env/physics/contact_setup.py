@@ -31,6 +31,7 @@ from moor_env.physics.layout import (
     CF_MU,
     CF_ON,
     CF_RESTITUTION,
+    CF_SEGMENTS,
     CF_SPEED,
     CF_STICK_SPEED,
     CF_STIFFNESS,
@@ -144,6 +145,7 @@ def contact_parameters(ea_n: float, segment_m: float, node_mass_kg: float, conta
     out[CF_SPEED] = contact_speed_m_s
     out[CF_MU] = friction_coefficient
     out[CF_STICK_SPEED] = stick_speed_m_s
+    out[CF_SEGMENTS] = 1.0
     return out
 
 

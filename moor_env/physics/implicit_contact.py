@@ -13,7 +13,10 @@ So, as the segments' axial law, the contact is solved for:
   n n^T), the anchor's rotation, and the friction's dependence on the normal force (symmetrised, it would be an
   indefinite term of size mu k that can make the block singular);
 - the anchor receives the opposite of the impulse the solve gives each node (its change from the start-of-step
-  force, already in the anchor's explicit load), through its rigid-body equations: momentum is conserved.
+  force, already in the anchor's explicit load), through its rigid-body equations: momentum is conserved;
+- a segment that cuts into the anchor deeper than its nodes at the start of the step, or is predicted to at its
+  end (``physics/segment_contact.py``), is solved as two node contacts at its deepest point, one per free node
+  with its share of the stiffness and damping (:func:`_segment_pass`).
 """
 
 from __future__ import annotations
@@ -21,16 +24,10 @@ from __future__ import annotations
 import math
 
 from moor_env.physics._jit import jit_no_refcount, jit_step
-from moor_env.physics.anchor_surface import surface_distance
-from moor_env.physics.contact import add_contact_reaction, contact_force, relative_velocity
-from moor_env.physics.layout import (
-    CF_MU,
-    CF_STICK_SPEED,
-    CF_STIFFNESS,
-    CF_ZETA,
-    CO_FORCE,
-    CO_PEAK_FORCE,
-)
+from moor_env.physics.anchor_surface import bounding_radius_m, surface_distance
+from moor_env.physics.contact import add_contact_reaction, contact_force, record_contact_force, relative_velocity
+from moor_env.physics.layout import CF_MU, CF_SEGMENTS, CF_STICK_SPEED, CF_STIFFNESS, CF_ZETA, EF_DEPTH, SI_A, SI_B
+from moor_env.physics.segment_contact import may_cut, segment_contact
 from moor_env.physics.tree import add_sym
 
 # contact set of a node during one implicit step
@@ -40,6 +37,7 @@ SET_ENTERED = 2  # outside at the start, predicted inside at its end (linear law
 SET_LEFT = 3  # inside at the start, predicted outside at its end (no force)
 SET_COMING = 4  # outside at the start, inside at its end at its start velocity: in the first solve as SET_ENTERED
 SET_MISSED = 5  # SET_COMING whose solve ends it outside: out, and it may still enter once
+SEGMENT_ENTRY_M = 1e-6  # a segment predicted this far into the anchor at the end of the step enters it in the step
 SET_BITS = 3  # an entry of the candidate list (``state.contact_set``) is node << SET_BITS | its SET_* state
 SET_MASK = (1 << SET_BITS) - 1
 
@@ -201,6 +199,7 @@ def assemble_contact(h, model, state):
         node_acc[n, 0] += rx
         node_acc[n, 1] += ry
         node_acc[n, 2] += rz
+    _segment_pass(h, model, state, False)
 
 
 @jit_no_refcount
@@ -236,8 +235,65 @@ def contact_reaction(h, model, state):
         tx += f0x + fx
         ty += f0y + fy
         tz += f0z + fz
-    force = math.sqrt(tx * tx + ty * ty + tz * tz)
-    out = state.contact_out
-    out[CO_FORCE] = force
-    out[CO_PEAK_FORCE] = max(out[CO_PEAK_FORCE], force)
+    sx, sy, sz = _segment_pass(h, model, state, True)
+    if sx != 0.0 or sy != 0.0 or sz != 0.0:
+        any_contact = True
+    record_contact_force(state.contact_out, tx + sx, ty + sy, tz + sz)
     return any_contact
+
+
+@jit_no_refcount
+def _segment_pass(h, model, state, react):
+    """The segment contacts of the step (``physics/segment_contact.py``), each linearised as two node contacts at
+    its deepest point, one per free node with its share of the stiffness and damping (that module's docstring): a
+    segment cutting in at the start of the step stays in for the step (``SET_IN``); one with both nodes outside
+    that reaches the anchor within the step at its present velocity enters with the linear law from its gap
+    (``SET_ENTERED``). With ``react`` False: their terms into the nodes' blocks and right-hand sides
+    (:func:`assemble_contact`); with ``react`` True: the anchor's reaction to the force the solve applied to the
+    free nodes beyond the start-of-step force (:func:`contact_reaction`). Returns the net force of the segments
+    over the step [N] (zero without ``react``)."""
+    seg_i = state.seg_i
+    p = state.node_pos
+    v = state.node_vel
+    dv = state.node_acc
+    shape = model.contact_shape
+    seabed_z = -model.env_f[EF_DEPTH]
+    net_x = net_y = net_z = 0.0
+    radius = bounding_radius_m(shape)
+    for s in range(seg_i.shape[0] if model.contact_f[CF_SEGMENTS] != 0.0 else 0):
+        if not may_cut(p, state.node_i, seg_i, s, state.body_state, shape, seabed_z, radius):
+            continue
+        a = seg_i[s, SI_A]
+        b = seg_i[s, SI_B]
+        e, fx, fy, fz, px, py, pz, nx, ny, nz, wx, wy, wz, mass, _, wa, wb, node_inside = segment_contact(
+            p, v, state.node_i, state.node_mass, a, b, state.body_state, shape, model.contact_f)
+        if wa + wb <= 0.0:
+            continue
+        mode = SET_IN if e > 0.0 else SET_OUT
+        if mode == SET_OUT and not node_inside and e - h * (wx * nx + wy * ny + wz * nz) > SEGMENT_ENTRY_M:
+            mode = SET_ENTERED
+        if mode == SET_OUT:
+            continue
+        if not react:
+            terms = contact_terms(h, mode, e, nx, ny, nz, wx, wy, wz, mass, model.contact_f, 0.0, 0.0, 0.0)
+            for n, w in ((a, wa), (b, wb)):
+                if w > 0.0:
+                    add_sym(state.node_mm, n, w * terms[0], w * terms[1], w * terms[2], w * terms[3],
+                            w * terms[4], w * terms[5])
+                    dv[n, 0] += w * terms[6]
+                    dv[n, 1] += w * terms[7]
+                    dv[n, 2] += w * terms[8]
+            continue
+        cx = cy = cz = 0.0
+        for n, w in ((a, wa), (b, wb)):
+            if w > 0.0:
+                gx, gy, gz = contact_force_change(h, mode, e, nx, ny, nz, wx, wy, wz, mass, model.contact_f,
+                                                  dv[n, 0], dv[n, 1], dv[n, 2], 0.0, 0.0, 0.0)
+                cx += w * gx
+                cy += w * gy
+                cz += w * gz
+        add_contact_reaction(state.body_load, state.body_state, px, py, pz, cx, cy, cz)
+        net_x += fx + cx
+        net_y += fy + cy
+        net_z += fz + cz
+    return net_x, net_y, net_z

@@ -121,7 +121,8 @@ CF_ZETA = 3  # damping ratio of a node's contact oscillation, set by the restitu
 CF_SPEED = 4  # characteristic contact speed the stiffness was chosen for [m/s]
 CF_MU = 5  # Coulomb friction coefficient [-]
 CF_STICK_SPEED = 6  # sliding speed below which friction is viscous (regularised stick) [m/s]
-N_CONTACT_F = 7
+CF_SEGMENTS = 7  # 1 where the contact also acts on segments cutting deeper than their nodes (segment_contact.py)
+N_CONTACT_F = 8
 
 # contact_out slots (what the contact did, physics/contact.py: add_contact_loads)
 CO_FORCE = 0  # magnitude of the net contact force on the anchor at the last load evaluation [N]
@@ -129,7 +130,8 @@ CO_PEAK_FORCE = 1  # its running maximum (reset at the release) [N]
 CO_NODES = 2  # nodes inside the anchor's surface at the last load evaluation
 CO_DEPTH = 3  # deepest of them [m]
 CO_PEAK_DEPTH = 4  # its running maximum (reset at the release) [m]
-N_CONTACT_OUT = 5
+CO_SEGMENTS = 5  # segments cutting into it deeper than their nodes (physics/segment_contact.py), last evaluation
+N_CONTACT_OUT = 6
 
 # contact_shape columns: the anchor's surface as coaxial cylinders (physics/contact.py)
 CS_FRONT = 0  # axial coordinate of the end towards the tip, from the COG [m]

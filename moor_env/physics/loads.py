@@ -2,7 +2,8 @@
 
 :func:`compute_loads` calls each force law once (line segments ``line.segment_loads``, point masses
 ``point_loads.add_point_loads``, seabed ``seabed.seabed_force``, the anchor ``anchor.body_loads``, the lines'
-contact with the anchor ``contact.add_contact_loads``) for every integrator and the statics; a new force is a
+contact with the anchor, of its nodes ``contact.add_contact_loads`` and of its segments
+``segment_contact.add_segment_contact_loads``) for every integrator and the statics; a new force is a
 law in its own module, called here, with its parameters in the model record and any state it carries in the state
 record (``physics/records.py``). :func:`set_constrained_nodes` places the nodes held by a vessel, the anchor or a
 parent node; :func:`compute_accelerations` adds the explicit integrators' solve for the free nodes.
@@ -12,7 +13,7 @@ from __future__ import annotations
 
 from moor_env.physics._jit import jit_no_refcount
 from moor_env.physics.anchor import add_point_load, body_acceleration, body_loads, body_point
-from moor_env.physics.contact import add_contact_loads
+from moor_env.physics.contact import add_contact_loads, record_contact_force
 from moor_env.physics.layout import (
     BF_ACTIVE,
     CF_ON,
@@ -30,6 +31,7 @@ from moor_env.physics.linalg3 import solve_sym3
 from moor_env.physics.line import segment_loads
 from moor_env.physics.point_loads import add_point_loads
 from moor_env.physics.seabed import seabed_force
+from moor_env.physics.segment_contact import add_segment_contact_loads
 from moor_env.physics.vessels import track_state
 
 
@@ -143,8 +145,13 @@ def compute_loads(model, state):
         if model.contact_f[CF_ON] != 0.0:
             reaction = add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_state,
                                          model.contact_shape, model.contact_f, state.contact_out, -env_f[EF_DEPTH])
+            segments = add_segment_contact_loads(node_pos, node_vel, node_i, node_mass, state.seg_i, node_force,
+                                                 body_state, model.contact_shape, model.contact_f, -env_f[EF_DEPTH],
+                                                 state.contact_out)
             for c in range(6):
-                body_load[c] += reaction[c]
+                body_load[c] += reaction[c] + segments[c]
+            record_contact_force(state.contact_out, reaction[0] + segments[0], reaction[1] + segments[1],
+                                 reaction[2] + segments[2])
         for n in range(nn):
             if node_i[n, NI_KIND] == NODE_BODY:
                 add_point_load(body_load, body_state, node_f[n, NF_BODY_S], node_force[n, 0], node_force[n, 1],

@@ -232,7 +232,7 @@ def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, a
     sim.env_f[L.EF_SLACK_SMOOTHING] = SMOOTHING_FINAL
     sim.env_f[L.EF_SEABED_SMOOTHING] = 0.0
     depth_m = _depth_inside_anchor(sim)
-    start_inside = anchor_intrusion(sim)[0] > 0.0
+    start_inside = _line_inside(sim) > 0.0
     try:
         calm = 0.0 if current > 0.0 and not warm else current
         if depth_m > RAMP_DEPTH_M:
@@ -244,7 +244,7 @@ def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, a
             apply_current(stage, current, tol_rel, max_iter)
     except StaticsNotConverged as exc:  # the anchor's 5x5 system singular
         exc.line_on_anchor = depth_m > 0.0 or _depth_inside_anchor(sim) > 0.0
-        exc.inside_anchor = start_inside or anchor_intrusion(sim)[0] > 0.0
+        exc.inside_anchor = start_inside or _line_inside(sim) > 0.0
         raise
     finally:
         sim.env_f[L.EF_CUR_SCALE] = current
@@ -261,7 +261,7 @@ def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, a
         raise StaticsNotConverged(f"static equilibrium not reached after {reason}{where} (largest residual/weight "
                                   f"{ctl[C_RESIDUAL]:.3g}, tolerance {tol_rel:g})", float(ctl[C_RESIDUAL]),
                                   line_on_anchor=on_anchor,
-                                  inside_anchor=start_inside or anchor_intrusion(sim)[0] > 0.0)
+                                  inside_anchor=start_inside or _line_inside(sim) > 0.0)
     return StaticsReport(iterations, float(ctl[C_RESIDUAL]), 0.0, n_dofs, "newton")
 
 
@@ -270,5 +270,15 @@ def _contact_modelled(sim) -> bool:
 
 
 def _depth_inside_anchor(sim) -> float:
-    """How deep the deepest line node lies inside the anchor [m] where the scene models their contact (else 0)."""
-    return anchor_intrusion(sim)[0] if _contact_modelled(sim) else 0.0
+    """How deep the deepest point of a line lies inside the anchor [m] where the scene models their contact (else
+    0): its nodes, and with the segments' contact (``physics/segment_contact.py``) any point of its segments (a
+    line held by a segment over a rim has its nodes outside)."""
+    return _line_inside(sim) if _contact_modelled(sim) else 0.0
+
+
+def _line_inside(sim) -> float:
+    """How deep the deepest point of a line lies inside the anchor [m], whether or not the contact is on: its
+    nodes, and where the scene has the segments' contact, any point of its segments."""
+    if sim.model.contact_f[L.CF_SEGMENTS] != 0.0:
+        return sim.deepest_segment_inside_m()
+    return anchor_intrusion(sim)[0]

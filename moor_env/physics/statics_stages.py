@@ -119,16 +119,20 @@ def stiffen_contact(stage: Stage, scale: float) -> None:
     Why: from a state that hangs a line through the anchor, the full stiffness's first step throws the line out to
     the nearest face at once, and the loop, held by its slack bottom alone, does not find its way back (from there
     most such scenes do not converge within 2000 iterations); soft first, the line is pushed out as the loop
-    follows."""
+    follows. The ramp acts on the nodes alone (``CF_SEGMENTS`` off): a line through the anchor has whole segments
+    inside it, whose deepest points would push it out along their own faces; the segments' contact comes in with
+    the full stiffness, where the nodes are out."""
     contact_f = stage.sim.model.contact_f
-    stiffness = float(contact_f[L.CF_STIFFNESS])
+    stiffness, segments = float(contact_f[L.CF_STIFFNESS]), float(contact_f[L.CF_SEGMENTS])
     try:
+        contact_f[L.CF_SEGMENTS] = 0.0
         for share in CONTACT_RAMP:
             contact_f[L.CF_STIFFNESS] = stiffness * share
             stage.ctl[C_TAU] = TAU_START_S
             stage.run(scale, STAGE_TOLERANCE, STAGE_STEP_M, STAGE_ITERATIONS)
     finally:
         contact_f[L.CF_STIFFNESS] = stiffness
+        contact_f[L.CF_SEGMENTS] = segments
     stage.ctl[C_TAU] = TAU_START_S
 
 

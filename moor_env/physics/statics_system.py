@@ -359,7 +359,7 @@ def solve_step(inv_tau2, nq, body_node, basis, res_body, dq, model, state, scrat
     while True:
         _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling, orow)
         if contact:
-            add_contact_blocks(model, state, geo, cand, cin, dmat, bmat, cmat, coupled, body_a, body_r)
+            add_contact_blocks(model, state, geo, cand, cin, dmat, coupling, bmat, cmat, coupled, body_a, body_r)
         eliminate(inv_tau2, nq, body_node, basis, res_body, dq, model, state, dmat, coupling, tree, orow, contact,
                   bmat, cmat, coupled, body_a, body_r)
         solves += 1
@@ -409,9 +409,9 @@ def count_slack(state, seg_age):
 def new_scratch(n_nodes, n_segs):
     """Scratch arrays of :func:`solve_step`: diagonal blocks, segment couplings, segments K holds taut, nodes on the
     seabed after the step; the line-anchor contact's (``physics/statics_contact.py``): candidates' geometry,
-    candidates, nodes inside after the step, node-anchor and anchor-node couplings, coupled nodes, the anchor's
-    block and right-hand side."""
+    candidates, candidates inside after the step (a row per node, then one per segment), node-anchor and
+    anchor-node couplings, coupled nodes, the anchor's block and right-hand side."""
     return (np.zeros((n_nodes, 3, 3)), np.zeros((n_segs, 2, 3, 3)), np.zeros(n_segs, np.int64),
-            np.zeros(n_nodes, np.int64), np.zeros((n_nodes, N_GEO)), np.zeros(n_nodes, np.int64),
-            np.zeros(n_nodes, np.int64), np.zeros((n_nodes, 3, 5)), np.zeros((n_nodes, 5, 3)),
+            np.zeros(n_nodes, np.int64), np.zeros((n_nodes + n_segs, N_GEO)), np.zeros(n_nodes + n_segs, np.int64),
+            np.zeros(n_nodes + n_segs, np.int64), np.zeros((n_nodes, 3, 5)), np.zeros((n_nodes, 5, 3)),
             np.zeros(n_nodes, np.int64), np.zeros((5, 5)), np.zeros(5))

@@ -137,6 +137,7 @@ def _callers(function: str) -> list[str]:
     ("seabed_force", ["physics/loads.py"]),
     ("body_loads", ["physics/loads.py"]),
     ("add_contact_loads", ["physics/loads.py"]),
+    ("add_segment_contact_loads", ["physics/loads.py"]),
     ("add_point_loads_dv", ["physics/implicit_assembly.py"]),
     ("add_seabed_dv", ["physics/implicit_assembly.py"]),
     ("add_slender_drag_dv", ["physics/implicit_assembly.py"]),

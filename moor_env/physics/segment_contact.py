@@ -1,0 +1,319 @@
+"""Contact between line segments and the anchor's surface, where a straight segment cuts into the anchor deeper
+than its nodes do: a chain draped over the back end's rim, or a chord across the shaft.
+
+Why: the node contact (``physics/contact.py``) holds the nodes out of the anchor, but a segment between two nodes
+resting on either side of a rim cuts the corner (at rest over the back rim, by up to 9 cm with 0.5-2 m chain
+segments), and a segment crossing the shaft with both nodes outside passes through it unhindered.
+
+Geometry. The segment's deepest point inside the surface, p* = x_a + t (x_b - x_a) at depth d*
+(``anchor_surface.segment_depth``), is measured against what the node contact already holds there: the excess
+
+    e = d* - ((1 - t) max(d_a, 0) + t max(d_b, 0)),
+
+with d_a, d_b the nodes' depths. It is zero where the depth is linear along the segment (a segment lying on a
+face, or along the shaft at one depth), d* where both nodes are outside, and it goes to zero as p* moves to an
+end, so the segment's force sets in and fades out continuously. Moving the segment across itself by dx changes
+e by -g . dx: where p* lies inside one face or on the shaft, g is the surface normal there (perpendicular to the
+segment: the depth is stationary along it); where it lies on the kink between an end face and the shaft (a
+segment over a rim), g is the combination l n- + (1 - l) n+ of the two faces' normals that is perpendicular to
+the segment (the depth's subgradient that does not slide the segment along itself), |g| < 1. The contact acts
+along n = g / |g| on the excess e |g| (the spring energy k (e |g|)^2 / 2 has the force k e |g|^2 ... along n per
+unit e |g|, i.e. its stiffness along n is k |g|^2).
+
+Law. The node law of ``contact.py`` (:func:`moor_env.physics.contact.law_at`: spring-dashpot, regularised
+Coulomb friction) at depth e, normal n, the velocity of p* relative to the anchor's point there (the nodes'
+velocities interpolated) and the inertia of p* (:func:`point_mass`). The force is shared
+(1 - t, t) between the segment's nodes and the anchor takes its opposite at p* (a node held by a vessel takes
+its share out of the model; the anchor's own node passes its share back to the anchor).
+
+Linearisation. The segment's stiffness is k g g^T, g = ((1 - t) n, t n, -J^T n) over node a, node b and the
+anchor (t and n held). The static solver takes it whole: node blocks (1 - t)^2 k n n^T and t^2 k n n^T, their
+coupling t (1 - t) k n n^T in the segment's own block, the anchor's as a node contact's
+(``physics/statics_contact.py``). The implicit step, whose segment blocks have no room for it, takes that of two
+node contacts at p* instead, one per node with stiffness (1 - t) k and t k: the same anchor block and couplings,
+and node blocks diag((1 - t), t) k n n^T in place of the coupled ((1 - t)^2, t (1 - t); t (1 - t), t^2) k n n^T.
+The replacement is stiffer by the positive semidefinite form k (1 - t) t (n . (dx_a - dx_b))^2, so a step with it
+is at least as stable as with the exact coupling. (In the static solver it is not: Newton's method with it
+converges linearly where t is near 0 or 1, at a rate of about 1 - t per iteration, thousands of iterations on a
+chain resting over the back end's rim.)
+"""
+
+from __future__ import annotations
+
+import math
+
+from moor_env.physics._jit import jit
+from moor_env.physics.anchor_surface import (
+    FEATURE_SHAFT,
+    bounding_radius_m,
+    from_cog,
+    segment_depth,
+    surface_distance,
+    within_reach,
+)
+from moor_env.physics.contact import law_at, relative_velocity
+from moor_env.physics.layout import (
+    BS_AXIS,
+    BS_POS,
+    CF_SEGMENTS,
+    CO_SEGMENTS,
+    CS_BACK,
+    CS_FRONT,
+    NI_KIND,
+    NODE_BODY,
+    NODE_FREE,
+    SI_A,
+    SI_ACTIVE,
+    SI_B,
+)
+
+KINK_PROBE_M = 1e-6  # how far to either side of the deepest point the normals are compared for a kink [m]
+
+
+@jit
+def may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, body_radius_m):
+    """Whether active segment s can cut into the anchor (cheap tests before :func:`segment_geometry`): its
+    midpoint within half its length of the sphere that holds the anchor (``body_radius_m`` [m] about its COG,
+    ``anchor_surface.bounding_radius_m``) and of its bounding cylinder, one of its nodes free and neither the
+    anchor's own, both above the seabed (``seabed_z`` [m]: below it the anchor is in the soil), and its nodes not
+    both behind the back end or both ahead of the tip.
+
+    Why not a segment from the anchor's own node (the padeye at the back end's centre): hinged there, it cannot
+    lie along the back face and over the rim as the chain does, and once turned past the rim it cuts the corner by
+    most of its length. On gjoa-500 at 170 m spacing (fast preset, 1 m vertical chain segments) that pushed the
+    anchor with 1.3 MN and tilted it 1.0 deg at touchdown, against no tilt with 0.5 m segments, where the chain's
+    nodes carry the contact (0.49 MN)."""
+    if seg_i[s, SI_ACTIVE] == 0:
+        return False
+    a = seg_i[s, SI_A]
+    b = seg_i[s, SI_B]
+    dx = node_pos[b, 0] - node_pos[a, 0]
+    dy = node_pos[b, 1] - node_pos[a, 1]
+    dz = node_pos[b, 2] - node_pos[a, 2]
+    mx = node_pos[a, 0] + 0.5 * dx
+    my = node_pos[a, 1] + 0.5 * dy
+    mz = node_pos[a, 2] + 0.5 * dz
+    gx = mx - body_state[BS_POS]
+    gy = my - body_state[BS_POS + 1]
+    gz = mz - body_state[BS_POS + 2]
+    half2 = 0.25 * (dx * dx + dy * dy + dz * dz)
+    # (R + h)^2 <= 2 R^2 + 2 h^2: the broad phase without a square root (most segments lie far from the anchor)
+    if gx * gx + gy * gy + gz * gz > 2.0 * (body_radius_m * body_radius_m + half2):
+        return False
+    if node_i[a, NI_KIND] != NODE_FREE and node_i[b, NI_KIND] != NODE_FREE:
+        return False
+    if node_i[a, NI_KIND] == NODE_BODY or node_i[b, NI_KIND] == NODE_BODY:
+        return False
+    if node_pos[a, 2] < seabed_z or node_pos[b, 2] < seabed_z:
+        return False
+    aa = from_cog(node_pos[a, 0], node_pos[a, 1], node_pos[a, 2], body_state)[3]
+    ab = from_cog(node_pos[b, 0], node_pos[b, 1], node_pos[b, 2], body_state)[3]
+    back = shape[shape.shape[0] - 1, CS_BACK]
+    front = shape[0, CS_FRONT]
+    if (aa <= back and ab <= back) or (aa >= front and ab >= front):
+        return False
+    return within_reach(mx, my, mz, body_state, shape, math.sqrt(half2))
+
+
+@jit
+def segment_geometry(ax, ay, az, bx, by, bz, body_state, shape):
+    """The segment contact's geometry (module docstring) of the segment from a to b: the excess e [m] along the
+    contact's normal (negative: the gap the segment must close before it cuts in deeper than its nodes), t (p* =
+    a + t (b - a)), p* [m], the unit normal n, the stiffness factor |g|^2 of the excess's gradient (1 off a kink),
+    whether a node of it lies inside the anchor (its excess is then measured from that node's depth, not a gap),
+    and dt/dx_a, dt/dx_b (:func:`contact_frame`)."""
+    deepest, t = segment_depth(ax, ay, az, bx, by, bz, body_state, shape)
+    da = -surface_distance(ax, ay, az, body_state, shape)[0]
+    db = -surface_distance(bx, by, bz, body_state, shape)[0]
+    excess = deepest - ((1.0 - t) * max(da, 0.0) + t * max(db, 0.0))
+    px = ax + t * (bx - ax)
+    py = ay + t * (by - ay)
+    pz = az + t * (bz - az)
+    gx, gy, gz, uax, uay, uaz, ubx, uby, ubz = contact_frame(ax, ay, az, bx, by, bz, t, body_state, shape)
+    size = math.sqrt(gx * gx + gy * gy + gz * gz)
+    return (excess * size, t, px, py, pz, gx / size, gy / size, gz / size, size * size, da > 0.0 or db > 0.0,
+            uax, uay, uaz, ubx, uby, ubz)
+
+
+@jit
+def _normal_along(ax, ay, az, bx, by, bz, t, body_state, shape):
+    """The surface normal (the signed distance's gradient) at the point a + t (b - a)."""
+    return surface_distance(ax + t * (bx - ax), ay + t * (by - ay), az + t * (bz - az), body_state, shape)[1:4]
+
+
+@jit
+def contact_frame(ax, ay, az, bx, by, bz, t, body_state, shape):
+    """g, the gradient of the segment's depth at its deepest point p* (t) with respect to a move of the segment
+    across itself (|g| <= 1), and how p* moves along the segment as either node moves, dt/dx_a and dt/dx_b [1/m]
+    (module docstring): (gx, gy, gz, dt/dx_a (3), dt/dx_b (3)).
+
+    Off a kink g is the surface normal at p*; where p* lies on the shaft, t is the segment's closest approach to
+    the axis, t = -(q0 . q1) / |q1|^2 (q0, q1: node a's and the segment's radial parts), and moves as they do. On
+    the kink between two faces (normals n- and n+ found ``KINK_PROBE_M`` to either side), g is the combination
+    l n- + (1 - l) n+ perpendicular to the segment, and t the crossing of the two faces' depths,
+    (n- - n+) . (x_a + t (x_b - x_a)) fixed."""
+    dx = bx - ax
+    dy = by - ay
+    dz = bz - az
+    length = math.sqrt(dx * dx + dy * dy + dz * dz)
+    sd, nx, ny, nz, _, _, _, _, _, _, feature = surface_distance(ax + t * dx, ay + t * dy, az + t * dz, body_state,
+                                                                 shape)
+    if length <= 0.0:
+        return nx, ny, nz, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    sx = dx / length
+    sy = dy / length
+    sz = dz / length
+    probe = KINK_PROBE_M / length
+    mx, my, mz = _normal_along(ax, ay, az, bx, by, bz, max(t - probe, 0.0), body_state, shape)
+    qx, qy, qz = _normal_along(ax, ay, az, bx, by, bz, min(t + probe, 1.0), body_state, shape)
+    if mx * qx + my * qy + mz * qz < 1.0 - 1e-9:
+        sm = mx * sx + my * sy + mz * sz
+        sq = qx * sx + qy * sy + qz * sz
+        jx = mx - qx
+        jy = my - qy
+        jz = mz - qz
+        across = jx * dx + jy * dy + jz * dz
+        if sq != sm and across != 0.0:
+            share = sq / (sq - sm)
+            if 0.0 <= share <= 1.0:
+                fa = -(1.0 - t) / across
+                fb = -t / across
+                return (share * mx + (1.0 - share) * qx, share * my + (1.0 - share) * qy,
+                        share * mz + (1.0 - share) * qz, fa * jx, fa * jy, fa * jz, fb * jx, fb * jy, fb * jz)
+    along = nx * sx + ny * sy + nz * sz  # zero where the depth is stationary along the segment
+    gx = nx - along * sx
+    gy = ny - along * sy
+    gz = nz - along * sz
+    size = math.sqrt(gx * gx + gy * gy + gz * gz)
+    if size < 1e-9:  # the segment lies along the normal
+        return nx, ny, nz, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    if feature != FEATURE_SHAFT or not 0.0 < t < 1.0:
+        return gx / size, gy / size, gz / size, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    return (gx / size, gy / size, gz / size) + _closest_approach_motion(ax, ay, az, bx, by, bz, t, body_state)
+
+
+@jit
+def _closest_approach_motion(ax, ay, az, bx, by, bz, t, body_state):
+    """dt/dx_a and dt/dx_b of the segment's closest approach to the anchor's axis, t = -(q0 . q1) / |q1|^2:
+    dt/dx_a = -((1 - 2 t) q1 - q0) / |q1|^2, dt/dx_b = -(q0 + 2 t q1) / |q1|^2."""
+    ex = body_state[BS_AXIS]
+    ey = body_state[BS_AXIS + 1]
+    ez = body_state[BS_AXIS + 2]
+    rx, ry, rz, a0 = from_cog(ax, ay, az, body_state)
+    q0x = rx - a0 * ex
+    q0y = ry - a0 * ey
+    q0z = rz - a0 * ez
+    dx = bx - ax
+    dy = by - ay
+    dz = bz - az
+    along = dx * ex + dy * ey + dz * ez
+    q1x = dx - along * ex
+    q1y = dy - along * ey
+    q1z = dz - along * ez
+    q11 = q1x * q1x + q1y * q1y + q1z * q1z
+    if q11 <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    return (-((1.0 - 2.0 * t) * q1x - q0x) / q11, -((1.0 - 2.0 * t) * q1y - q0y) / q11,
+            -((1.0 - 2.0 * t) * q1z - q0z) / q11, -(q0x + 2.0 * t * q1x) / q11, -(q0y + 2.0 * t * q1y) / q11,
+            -(q0z + 2.0 * t * q1z) / q11)
+
+
+@jit
+def takes_share(node_i, n):
+    """Whether node n takes its share of a segment contact's force: a free node, or the anchor's own (its share
+    goes to the anchor through it); a node held by a vessel or welded to another does not."""
+    kind = node_i[n, NI_KIND]
+    return kind == NODE_FREE or kind == NODE_BODY
+
+
+@jit
+def free_shares(node_i, a, b, t):
+    """The shares (1 - t, t) of the segment's free nodes a and b (zero for a node that is not free): the nodes the
+    contact moves, whose inertia :func:`point_mass` counts."""
+    wa = 1.0 - t if node_i[a, NI_KIND] == NODE_FREE else 0.0
+    wb = t if node_i[b, NI_KIND] == NODE_FREE else 0.0
+    return wa, wb
+
+
+@jit
+def point_velocity(node_vel, a, b, t, px, py, pz, body_state):
+    """Velocity of p* (the nodes' velocities interpolated at t) relative to the anchor's point there [m/s]."""
+    return relative_velocity(px, py, pz, (1.0 - t) * node_vel[a, 0] + t * node_vel[b, 0],
+                             (1.0 - t) * node_vel[a, 1] + t * node_vel[b, 1],
+                             (1.0 - t) * node_vel[a, 2] + t * node_vel[b, 2], body_state)
+
+
+@jit
+def point_mass(node_mass, wa, wb, a, b):
+    """The mass the law's damping takes at p* [kg]: the inertia p* has where the force is shared (wa, wb) between
+    its free nodes, 1 / (wa^2 / m_a + wb^2 / m_b) (a node that is not free, zero share, counts as held). Why: with
+    it every node in the contact is damped at the law's ratio (node b, of its share t, feels the stiffness t^2 k and
+    the damping t^2 c = 2 zeta sqrt(t^2 k m_b))."""
+    inverse = 0.0
+    if wa > 0.0:
+        inverse += wa * wa / node_mass[a]
+    if wb > 0.0:
+        inverse += wb * wb / node_mass[b]
+    return 1.0 / inverse
+
+
+@jit
+def segment_contact(node_pos, node_vel, node_i, node_mass, a, b, body_state, shape, contact_f):
+    """The contact of the segment from node a to node b: (excess e [m], force at p* [N] (3), p* [m] (3), normal
+    (3), relative velocity of p* [m/s] (3), its mass [kg], t, the free nodes' shares wa, wb, whether a node lies
+    inside the anchor); no force where e <= 0 (then the gap, where both nodes are outside) or neither node is
+    free (then e <= 0 too)."""
+    e, t, px, py, pz, nx, ny, nz, _, node_inside = segment_geometry(
+        node_pos[a, 0], node_pos[a, 1], node_pos[a, 2], node_pos[b, 0], node_pos[b, 1], node_pos[b, 2], body_state,
+        shape)[:10]
+    wa, wb = free_shares(node_i, a, b, t)
+    if wa + wb <= 0.0:
+        return min(e, 0.0), 0.0, 0.0, 0.0, px, py, pz, nx, ny, nz, 0.0, 0.0, 0.0, 0.0, t, 0.0, 0.0, node_inside
+    wx, wy, wz = point_velocity(node_vel, a, b, t, px, py, pz, body_state)
+    mass = point_mass(node_mass, wa, wb, a, b)
+    if e <= 0.0:
+        return e, 0.0, 0.0, 0.0, px, py, pz, nx, ny, nz, wx, wy, wz, mass, t, wa, wb, node_inside
+    fx, fy, fz = law_at(e, nx, ny, nz, wx, wy, wz, mass, contact_f)[:3]
+    return e, fx, fy, fz, px, py, pz, nx, ny, nz, wx, wy, wz, mass, t, wa, wb, node_inside
+
+
+@jit
+def add_segment_contact_loads(node_pos, node_vel, node_i, node_mass, seg_i, node_force, body_state, shape,
+                              contact_f, seabed_z, contact_out):
+    """Add every segment contact's force (module docstring) to its nodes' ``node_force`` (shares 1 - t and t, to
+    the nodes that take one: :func:`takes_share`) and count the segments in ``contact_out`` (``CO_SEGMENTS``),
+    where ``contact_f`` has the segments' contact on (``CF_SEGMENTS``);
+    returns the reaction on the anchor, the opposite of the force at p* (F [N], M about the COG [N m], six
+    floats), and the deepest excess [m]."""
+    lx = ly = lz = mx = my = mz = 0.0
+    deepest = 0.0
+    count = 0
+    radius = bounding_radius_m(shape)
+    for s in range(seg_i.shape[0] if contact_f[CF_SEGMENTS] != 0.0 else 0):
+        if not may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, radius):
+            continue
+        a = seg_i[s, SI_A]
+        b = seg_i[s, SI_B]
+        e, fx, fy, fz, px, py, pz, _, _, _, _, _, _, _, t, _, _, _ = segment_contact(
+            node_pos, node_vel, node_i, node_mass, a, b, body_state, shape, contact_f)
+        if e <= 0.0:
+            continue
+        count += 1
+        deepest = max(deepest, e)
+        if takes_share(node_i, a):
+            node_force[a, 0] += (1.0 - t) * fx
+            node_force[a, 1] += (1.0 - t) * fy
+            node_force[a, 2] += (1.0 - t) * fz
+        if takes_share(node_i, b):
+            node_force[b, 0] += t * fx
+            node_force[b, 1] += t * fy
+            node_force[b, 2] += t * fz
+        rx, ry, rz, _ = from_cog(px, py, pz, body_state)
+        lx -= fx
+        ly -= fy
+        lz -= fz
+        mx -= ry * fz - rz * fy
+        my -= rz * fx - rx * fz
+        mz -= rx * fy - ry * fx
+    contact_out[CO_SEGMENTS] = count
+    return lx, ly, lz, mx, my, mz, deepest
