@@ -98,6 +98,7 @@ def run_scene(overrides: dict) -> dict:
         record.update(outcome="converged", iterations=result.iterations, release_point_m=result.release_point_m,
                       top_tensions_n=result.top_tensions_n,
                       nodes_on_anchor=int(result.simulator.work.contact_out[L.CO_NODES]),
+                      segments_on_anchor=int(result.simulator.work.contact_out[L.CO_SEGMENTS]),
                       segment_depth_m=result.simulator.deepest_segment_inside_m())
     except NoEquilibrium as exc:
         record.update(outcome="no equilibrium", cause=exc.cause)
@@ -179,7 +180,7 @@ def summarize(records: list[dict]) -> dict:
             "no_equilibrium": sum(r["outcome"] == "no equilibrium" for r in rows),
             "refused_by_config": sum(r["outcome"] == "refused by the config" for r in rows),
             "needs_fallback": sum(r["outcome"] == "needs the fallback" for r in rows),
-            "resting_on_anchor": sum(r.get("nodes_on_anchor", 0) > 0 for r in done),
+            "resting_on_anchor": sum(_resting(r) for r in done),
             "unsolved_on_anchor": sum(r["outcome"] == ON_ANCHOR for r in rows),
             "solve_ms": _quantiles(solve),
             "with_compile_ms": _quantiles(total),
@@ -202,10 +203,15 @@ def cause_stats(records: list[dict]) -> tuple[dict, dict]:
     return {k: len(v) for k, v in times.items()}, {k: _quantiles(np.array(v)) for k, v in times.items()}
 
 
+def _resting(record: dict) -> bool:
+    """Whether a converged scene rests a line on the anchor: a node, or a segment over a rim."""
+    return record.get("nodes_on_anchor", 0) + record.get("segments_on_anchor", 0) > 0
+
+
 def _resting_segments(records: list[dict]) -> dict:
     """How deep the lines resting on the anchor lie inside it, segment interiors included."""
     depth = np.array([r["segment_depth_m"] for r in records
-                      if r["outcome"] == "converged" and r.get("nodes_on_anchor", 0) > 0 and "segment_depth_m" in r])
+                      if r["outcome"] == "converged" and _resting(r) and "segment_depth_m" in r])
     if depth.size == 0:
         return {"scenes": 0}
     return {"scenes": int(depth.size), "max_m": float(depth.max()), "median_m": float(np.median(depth)),

@@ -48,15 +48,19 @@ def from_cog(px, py, pz, body_state):
 
 
 @jit
+def radial_part(px, py, pz, body_state):
+    """A point's axial coordinate a [m] and its radial vector from the anchor's axis, q = r - a e [m]."""
+    rx, ry, rz, a = from_cog(px, py, pz, body_state)
+    return a, rx - a * body_state[BS_AXIS], ry - a * body_state[BS_AXIS + 1], rz - a * body_state[BS_AXIS + 2]
+
+
+@jit
 def _anchor_frame(px, py, pz, body_state):
     """Axial coordinate a, radius rho, radial unit vector u and axis e of a point in the anchor's frame."""
     ex = body_state[BS_AXIS]
     ey = body_state[BS_AXIS + 1]
     ez = body_state[BS_AXIS + 2]
-    rx, ry, rz, a = from_cog(px, py, pz, body_state)
-    qx = rx - a * ex
-    qy = ry - a * ey
-    qz = rz - a * ez
+    a, qx, qy, qz = radial_part(px, py, pz, body_state)
     rho = math.sqrt(qx * qx + qy * qy + qz * qz)
     if rho > 0.0:
         return a, rho, qx / rho, qy / rho, qz / rho, ex, ey, ez
@@ -285,18 +289,12 @@ def _kink_candidates(ax, ay, az, bx, by, bz, body_state, shape, best, best_t):
     (where the shaft's depth peaks) and the points where the shaft's depth R - rho(t) equals an end face's, with
     a(t) and the radial vector q(t) linear in t: (|q1|^2 - d^2) t^2 + 2 (q0.q1 - c d) t + |q0|^2 - c^2 = 0 for
     rho = c + d t. Returns the deepest of them and (best, best_t)."""
-    rxa, rya, rza, a0 = from_cog(ax, ay, az, body_state)
-    rxb, ryb, rzb, ab = from_cog(bx, by, bz, body_state)
-    ex = body_state[BS_AXIS]
-    ey = body_state[BS_AXIS + 1]
-    ez = body_state[BS_AXIS + 2]
+    a0, q0x, q0y, q0z = radial_part(ax, ay, az, body_state)
+    ab, qbx, qby, qbz = radial_part(bx, by, bz, body_state)
     a1 = ab - a0
-    q0x = rxa - a0 * ex
-    q0y = rya - a0 * ey
-    q0z = rza - a0 * ez
-    q1x = rxb - ab * ex - q0x
-    q1y = ryb - ab * ey - q0y
-    q1z = rzb - ab * ez - q0z
+    q1x = qbx - q0x
+    q1y = qby - q0y
+    q1z = qbz - q0z
     q00 = q0x * q0x + q0y * q0y + q0z * q0z
     q01 = q0x * q1x + q0y * q1y + q0z * q1z
     q11 = q1x * q1x + q1y * q1y + q1z * q1z

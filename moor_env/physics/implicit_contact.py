@@ -26,7 +26,17 @@ import math
 from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.anchor_surface import bounding_radius_m, surface_distance
 from moor_env.physics.contact import add_contact_reaction, contact_force, record_contact_force, relative_velocity
-from moor_env.physics.layout import CF_MU, CF_SEGMENTS, CF_STICK_SPEED, CF_STIFFNESS, CF_ZETA, EF_DEPTH, SI_A, SI_B
+from moor_env.physics.layout import (
+    CF_MU,
+    CF_SEGMENTS,
+    CF_STICK_SPEED,
+    CF_STIFFNESS,
+    CF_ZETA,
+    EF_DEPTH,
+    EF_SPEED_LIMIT,
+    SI_A,
+    SI_B,
+)
 from moor_env.physics.segment_contact import may_cut, segment_contact
 from moor_env.physics.tree import add_sym
 
@@ -260,8 +270,9 @@ def _segment_pass(h, model, state, react):
     seabed_z = -model.env_f[EF_DEPTH]
     net_x = net_y = net_z = 0.0
     radius = bounding_radius_m(shape)
+    reach = 2.0 * h * model.env_f[EF_SPEED_LIMIT]  # as far as a node and the anchor can close in on each other
     for s in range(seg_i.shape[0] if model.contact_f[CF_SEGMENTS] != 0.0 else 0):
-        if not may_cut(p, state.node_i, seg_i, s, state.body_state, shape, seabed_z, radius):
+        if not may_cut(p, state.node_i, seg_i, s, state.body_state, shape, seabed_z, radius, reach):
             continue
         a = seg_i[s, SI_A]
         b = seg_i[s, SI_B]

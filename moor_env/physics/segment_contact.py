@@ -47,18 +47,18 @@ from moor_env.physics.anchor_surface import (
     FEATURE_SHAFT,
     bounding_radius_m,
     from_cog,
+    radial_part,
     segment_depth,
     surface_distance,
-    within_reach,
 )
 from moor_env.physics.contact import law_at, relative_velocity
 from moor_env.physics.layout import (
-    BS_AXIS,
     BS_POS,
     CF_SEGMENTS,
     CO_SEGMENTS,
     CS_BACK,
     CS_FRONT,
+    CS_RADIUS,
     NI_KIND,
     NODE_BODY,
     NODE_FREE,
@@ -71,12 +71,13 @@ KINK_PROBE_M = 1e-6  # how far to either side of the deepest point the normals a
 
 
 @jit
-def may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, body_radius_m):
+def may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, body_radius_m, margin_m):
     """Whether active segment s can cut into the anchor (cheap tests before :func:`segment_geometry`): its
     midpoint within half its length of the sphere that holds the anchor (``body_radius_m`` [m] about its COG,
-    ``anchor_surface.bounding_radius_m``) and of its bounding cylinder, one of its nodes free and neither the
-    anchor's own, both above the seabed (``seabed_z`` [m]: below it the anchor is in the soil), and its nodes not
-    both behind the back end or both ahead of the tip.
+    ``anchor_surface.bounding_radius_m``), one of its nodes free and neither the anchor's own, both above the
+    seabed (``seabed_z`` [m]: below it the anchor is in the soil), its nodes not both behind the back end or both
+    ahead of the tip, and its closest approach to the axis within the widest radius; each grown by ``margin_m``
+    [m] (0: cutting in now; more: able to within a step).
 
     Why not a segment from the anchor's own node (the padeye at the back end's centre): hinged there, it cannot
     lie along the back face and over the rim as the chain does, and once turned past the rim it cuts the corner by
@@ -106,13 +107,23 @@ def may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, body_radius
         return False
     if node_pos[a, 2] < seabed_z or node_pos[b, 2] < seabed_z:
         return False
-    aa = from_cog(node_pos[a, 0], node_pos[a, 1], node_pos[a, 2], body_state)[3]
-    ab = from_cog(node_pos[b, 0], node_pos[b, 1], node_pos[b, 2], body_state)[3]
-    back = shape[shape.shape[0] - 1, CS_BACK]
-    front = shape[0, CS_FRONT]
+    aa, qax, qay, qaz = radial_part(node_pos[a, 0], node_pos[a, 1], node_pos[a, 2], body_state)
+    ab, qbx, qby, qbz = radial_part(node_pos[b, 0], node_pos[b, 1], node_pos[b, 2], body_state)
+    back = shape[shape.shape[0] - 1, CS_BACK] - margin_m
+    front = shape[0, CS_FRONT] + margin_m
     if (aa <= back and ab <= back) or (aa >= front and ab >= front):
         return False
-    return within_reach(mx, my, mz, body_state, shape, math.sqrt(half2))
+    # the segment's closest approach to the axis, min |q_a + t (q_b - q_a)| over [0, 1], against the widest radius
+    q1x = qbx - qax
+    q1y = qby - qay
+    q1z = qbz - qaz
+    q11 = q1x * q1x + q1y * q1y + q1z * q1z
+    t = min(max(-(qax * q1x + qay * q1y + qaz * q1z) / q11, 0.0), 1.0) if q11 > 0.0 else 0.0
+    widest = 0.0
+    for i in range(shape.shape[0]):
+        widest = max(widest, shape[i, CS_RADIUS])
+    reach = widest + margin_m
+    return (qax + t * q1x) ** 2 + (qay + t * q1y) ** 2 + (qaz + t * q1z) ** 2 <= reach * reach
 
 
 @jit
@@ -196,20 +207,11 @@ def contact_frame(ax, ay, az, bx, by, bz, t, body_state, shape):
 def _closest_approach_motion(ax, ay, az, bx, by, bz, t, body_state):
     """dt/dx_a and dt/dx_b of the segment's closest approach to the anchor's axis, t = -(q0 . q1) / |q1|^2:
     dt/dx_a = -((1 - 2 t) q1 - q0) / |q1|^2, dt/dx_b = -(q0 + 2 t q1) / |q1|^2."""
-    ex = body_state[BS_AXIS]
-    ey = body_state[BS_AXIS + 1]
-    ez = body_state[BS_AXIS + 2]
-    rx, ry, rz, a0 = from_cog(ax, ay, az, body_state)
-    q0x = rx - a0 * ex
-    q0y = ry - a0 * ey
-    q0z = rz - a0 * ez
-    dx = bx - ax
-    dy = by - ay
-    dz = bz - az
-    along = dx * ex + dy * ey + dz * ez
-    q1x = dx - along * ex
-    q1y = dy - along * ey
-    q1z = dz - along * ez
+    _, q0x, q0y, q0z = radial_part(ax, ay, az, body_state)
+    _, qbx, qby, qbz = radial_part(bx, by, bz, body_state)
+    q1x = qbx - q0x
+    q1y = qby - q0y
+    q1z = qbz - q0z
     q11 = q1x * q1x + q1y * q1y + q1z * q1z
     if q11 <= 0.0:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -290,7 +292,7 @@ def add_segment_contact_loads(node_pos, node_vel, node_i, node_mass, seg_i, node
     count = 0
     radius = bounding_radius_m(shape)
     for s in range(seg_i.shape[0] if contact_f[CF_SEGMENTS] != 0.0 else 0):
-        if not may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, radius):
+        if not may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, radius, 0.0):
             continue
         a = seg_i[s, SI_A]
         b = seg_i[s, SI_B]

@@ -52,6 +52,7 @@ from moor_env.physics.segment_contact import free_shares, may_cut, segment_geome
 
 SLIDE_DEPTH_M = 0.01  # lines no deeper than this inside the anchor rest on it: a step slides them along it
 REACH_M = 2.0  # nodes this close to the anchor's bounding cylinder may enter the contact in one step
+SEGMENT_REACH_M = 0.1  # segments this close to it (and with a gap below REACH_M) may; farther ones wait a step
 # contact geometry of a candidate: depth (negative: gap) [m], normal, J^T n (5), and for a segment contact
 # (``physics/segment_contact.py``) the node a's share (1 - t); rows 0 .. nodes - 1 are the nodes, the rows after
 # them the segments (their depth the excess e, candidates only while e > 0)
@@ -132,7 +133,8 @@ def _segment_geometry(basis, model, state, geo, cand, cin):
         r = first + s
         cand[r] = 0
         cin[r] = 0
-        if not may_cut(node_pos, state.node_i, seg_i, s, body_state, model.contact_shape, seabed, radius):
+        if not may_cut(node_pos, state.node_i, seg_i, s, body_state, model.contact_shape, seabed, radius,
+                       SEGMENT_REACH_M):
             continue
         a = seg_i[s, L.SI_A]
         b = seg_i[s, L.SI_B]
