@@ -229,13 +229,18 @@ def segment_depth(ax, ay, az, bx, by, bz, body_state, shape):
     """The deepest point of the straight segment from a to b inside the anchor's surface: (depth [m], t), the point
     at a + t (b - a); the depth is negative where the whole segment stays outside.
 
-    The segment is sampled at ``SEGMENT_SAMPLES`` + 1 points, and the deepest is refined by golden-section search
-    between its neighbours; then the points where the deepest lies in closed form are tried too
-    (:func:`_kink_candidates`): the closest approach to the axis and the crossings of a shaft's depth with an end
-    face's, where the depth along the segment has its kink. The search alone finds a kink to about 1e-6 of the
-    segment's length, which at a contact's stiffness is a force of a hundred newtons; the closed form is exact
-    there.
+    The points where the deepest lies in closed form are tried (:func:`_kink_candidates`): the ends, the closest
+    approach to the axis and the crossings of a shaft's depth with an end face's, where the depth along the
+    segment has its kink. On a one-cylinder anchor these hold the deepest point wherever the segment cuts in (the
+    depth there is the least of the shaft's, concave, and the faces', linear). On a stepped one, the segment is
+    also sampled at ``SEGMENT_SAMPLES`` + 1 points and the deepest refined by golden-section search between its
+    neighbours (exact within one cylinder, the deepest of the sampled ones elsewhere); the search alone finds a
+    kink to about 1e-6 of the segment's length, which at a contact's stiffness is a force of a hundred newtons.
     """
+    if shape.shape[0] == 1:
+        best, best_t = _try(ax, ay, az, bx, by, bz, 0.0, body_state, shape, -math.inf, 0.0)
+        best, best_t = _try(ax, ay, az, bx, by, bz, 1.0, body_state, shape, best, best_t)
+        return _kink_candidates(ax, ay, az, bx, by, bz, body_state, shape, best, best_t)
     best_t = 0.0
     best = -math.inf
     for i in range(SEGMENT_SAMPLES + 1):

@@ -123,7 +123,28 @@ def may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, body_radius
     for i in range(shape.shape[0]):
         widest = max(widest, shape[i, CS_RADIUS])
     reach = widest + margin_m
-    return (qax + t * q1x) ** 2 + (qay + t * q1y) ** 2 + (qaz + t * q1z) ** 2 <= reach * reach
+    if (qax + t * q1x) ** 2 + (qay + t * q1y) ** 2 + (qaz + t * q1z) ** 2 > reach * reach:
+        return False
+    return not _on_the_back_face(aa, qax, qay, qaz, ab, qbx, qby, qbz, shape)
+
+
+@jit
+def _on_the_back_face(aa, qax, qay, qaz, ab, qbx, qby, qbz, shape):
+    """Whether a segment of a one-cylinder anchor has both nodes (axial coordinates aa, ab; radial vectors q)
+    where the back face is the nearest surface: within the radius and nearer the back face than the shaft and the
+    tip. Why: along such a segment the depth is the back face's, linear, so it cannot cut in deeper than its
+    nodes; a chain piled on the back end in the fall is all such segments, and the test is far cheaper than
+    :func:`segment_geometry`."""
+    if shape.shape[0] != 1:
+        return False
+    back = shape[0, CS_BACK]
+    front = shape[0, CS_FRONT]
+    radius = shape[0, CS_RADIUS]
+    for a, qx, qy, qz in ((aa, qax, qay, qaz), (ab, qbx, qby, qbz)):
+        rho = math.sqrt(qx * qx + qy * qy + qz * qz)
+        if rho > radius or a - back > radius - rho or a - back > front - a:
+            return False
+    return True
 
 
 @jit
