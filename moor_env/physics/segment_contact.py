@@ -70,7 +70,7 @@ from moor_env.physics.layout import (
 KINK_PROBE_M = 1e-6  # how far to either side of the deepest point the normals are compared for a kink [m]
 
 
-@jit
+@jit(inline="always")  # called once per segment per load evaluation: inlined, its array arguments stay in place
 def may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, body_radius_m, margin_m):
     """Whether active segment s can cut into the anchor (cheap tests before :func:`segment_geometry`): its
     midpoint within half its length of the sphere that holds the anchor (``body_radius_m`` [m] about its COG,
