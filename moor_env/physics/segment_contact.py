@@ -17,25 +17,25 @@ e by -g . dx: where p* lies inside one face or on the shaft, g is the surface no
 segment: the depth is stationary along it); where it lies on the kink between an end face and the shaft (a
 segment over a rim), g is the combination l n- + (1 - l) n+ of the two faces' normals that is perpendicular to
 the segment (the depth's subgradient that does not slide the segment along itself), |g| < 1. The contact acts
-along n = g / |g| on the excess e |g| (the spring energy k (e |g|)^2 / 2 has the force k e |g|^2 ... along n per
-unit e |g|, i.e. its stiffness along n is k |g|^2).
+along n = g / |g| on the depth e |g|: its force k e g is the gradient of the energy k e^2 / 2, and its stiffness
+along n is k |g|^2.
 
 Law. The node law of ``contact.py`` (:func:`moor_env.physics.contact.law_at`: spring-dashpot, regularised
 Coulomb friction) at depth e, normal n, the velocity of p* relative to the anchor's point there (the nodes'
 velocities interpolated) and the inertia of p* (:func:`point_mass`). The force is shared
 (1 - t, t) between the segment's nodes and the anchor takes its opposite at p* (a node held by a vessel takes
-its share out of the model; the anchor's own node passes its share back to the anchor).
+its share out of the model; segments from the anchor's own node are left out, :func:`may_cut`).
 
-Linearisation. The segment's stiffness is k g g^T, g = ((1 - t) n, t n, -J^T n) over node a, node b and the
-anchor (t and n held). The static solver takes it whole: node blocks (1 - t)^2 k n n^T and t^2 k n n^T, their
-coupling t (1 - t) k n n^T in the segment's own block, the anchor's as a node contact's
-(``physics/statics_contact.py``). The implicit step, whose segment blocks have no room for it, takes that of two
-node contacts at p* instead, one per node with stiffness (1 - t) k and t k: the same anchor block and couplings,
-and node blocks diag((1 - t), t) k n n^T in place of the coupled ((1 - t)^2, t (1 - t); t (1 - t), t^2) k n n^T.
-The replacement is stiffer by the positive semidefinite form k (1 - t) t (n . (dx_a - dx_b))^2, so a step with it
-is at least as stable as with the exact coupling. (In the static solver it is not: Newton's method with it
-converges linearly where t is near 0 or 1, at a rate of about 1 - t per iteration, thousands of iterations on a
-chain resting over the back end's rim.)
+Linearisation. The segment's stiffness is k |g|^2 G G^T, G = ((1 - t) n, t n, -J^T n) over node a, node b and
+the anchor (t and n held), plus the shift of the shares as p* moves along the segment (:func:`contact_frame`).
+The static solver takes it whole (``physics/statics_contact.py``): node blocks (1 - t)^2 and t^2 times
+k n n^T, their coupling t (1 - t) k n n^T in the segment's own block, the anchor's terms as a node contact's.
+The implicit step, whose segment blocks have no room for the coupling, takes two node contacts at p* instead,
+one per node with stiffness (1 - t) k and t k: the same anchor terms, and node blocks (1 - t) and t times
+k n n^T. That is stiffer by the positive semidefinite form k (1 - t) t (n . (dx_a - dx_b))^2, so the step is at
+least as stable as with the exact coupling. (The static solver cannot take it: Newton's method with it converges
+linearly where t is near 0 or 1; on gjoa-500 at spacing 0, with the chain over the back end's rim at t = 0.01,
+the residual fell by 0.05 % per iteration and the solve stopped unconverged after 2000.)
 """
 
 from __future__ import annotations
@@ -242,17 +242,10 @@ def _closest_approach_motion(ax, ay, az, bx, by, bz, t, body_state):
 
 
 @jit
-def takes_share(node_i, n):
-    """Whether node n takes its share of a segment contact's force: a free node, or the anchor's own (its share
-    goes to the anchor through it); a node held by a vessel or welded to another does not."""
-    kind = node_i[n, NI_KIND]
-    return kind == NODE_FREE or kind == NODE_BODY
-
-
-@jit
 def free_shares(node_i, a, b, t):
-    """The shares (1 - t, t) of the segment's free nodes a and b (zero for a node that is not free): the nodes the
-    contact moves, whose inertia :func:`point_mass` counts."""
+    """The shares (1 - t, t) of the segment's force that its nodes a and b take: zero for a node that is not free
+    (held by a vessel, its share leaves the model with it; welded, or the anchor's own, left out by
+    :func:`may_cut`). :func:`point_mass` counts the inertia of the free ones."""
     wa = 1.0 - t if node_i[a, NI_KIND] == NODE_FREE else 0.0
     wb = t if node_i[b, NI_KIND] == NODE_FREE else 0.0
     return wa, wb
@@ -304,7 +297,7 @@ def segment_contact(node_pos, node_vel, node_i, node_mass, a, b, body_state, sha
 def add_segment_contact_loads(node_pos, node_vel, node_i, node_mass, seg_i, node_force, body_state, shape,
                               contact_f, seabed_z, contact_out):
     """Add every segment contact's force (module docstring) to its nodes' ``node_force`` (shares 1 - t and t, to
-    the nodes that take one: :func:`takes_share`) and count the segments in ``contact_out`` (``CO_SEGMENTS``),
+    the free ones: :func:`free_shares`) and count the segments in ``contact_out`` (``CO_SEGMENTS``),
     where ``contact_f`` has the segments' contact on (``CF_SEGMENTS``);
     returns the reaction on the anchor, the opposite of the force at p* (F [N], M about the COG [N m], six
     floats), and the deepest excess [m]."""
@@ -317,20 +310,18 @@ def add_segment_contact_loads(node_pos, node_vel, node_i, node_mass, seg_i, node
             continue
         a = seg_i[s, SI_A]
         b = seg_i[s, SI_B]
-        e, fx, fy, fz, px, py, pz, _, _, _, _, _, _, _, t, _, _, _ = segment_contact(
+        e, fx, fy, fz, px, py, pz, _, _, _, _, _, _, _, _, wa, wb, _ = segment_contact(
             node_pos, node_vel, node_i, node_mass, a, b, body_state, shape, contact_f)
         if e <= 0.0:
             continue
         count += 1
         deepest = max(deepest, e)
-        if takes_share(node_i, a):
-            node_force[a, 0] += (1.0 - t) * fx
-            node_force[a, 1] += (1.0 - t) * fy
-            node_force[a, 2] += (1.0 - t) * fz
-        if takes_share(node_i, b):
-            node_force[b, 0] += t * fx
-            node_force[b, 1] += t * fy
-            node_force[b, 2] += t * fz
+        node_force[a, 0] += wa * fx
+        node_force[a, 1] += wa * fy
+        node_force[a, 2] += wa * fz
+        node_force[b, 0] += wb * fx
+        node_force[b, 1] += wb * fy
+        node_force[b, 2] += wb * fz
         rx, ry, rz, _ = from_cog(px, py, pz, body_state)
         lx -= fx
         ly -= fy
