@@ -183,9 +183,9 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
     axis0 = np.zeros(3)
     contact = body_node >= 0 and model.contact_f[L.CF_ON] != 0.0
     plan = np.empty((nn, 2))
-    plan_geo = np.zeros((nn + seg_i.shape[0], N_GEO))
-    plan_cand = np.zeros(nn + seg_i.shape[0], np.int64)
-    plan_cin = np.zeros(nn + seg_i.shape[0], np.int64)
+    plan_geo = np.zeros((nn, N_GEO))  # node rows only: the slide plan is the nodes' (no segment rows computed)
+    plan_cand = np.zeros(nn, np.int64)
+    plan_cin = np.zeros(nn, np.int64)
     tau = ctl[C_TAU]
     tol = ctl[C_TOL]
     tau_max = ctl[C_TAU_MAX] if ctl[C_TAU_MAX] > 0.0 else TAU_MAX_S
