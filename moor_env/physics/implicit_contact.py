@@ -24,20 +24,17 @@ from __future__ import annotations
 import math
 
 from moor_env.physics._jit import jit_no_refcount, jit_step
-from moor_env.physics.anchor_surface import bounding_radius_m, surface_distance
+from moor_env.physics.anchor_surface import surface_distance
 from moor_env.physics.contact import add_contact_reaction, contact_force, record_contact_force, relative_velocity
 from moor_env.physics.layout import (
     CF_MU,
-    CF_SEGMENTS,
     CF_STICK_SPEED,
     CF_STIFFNESS,
     CF_ZETA,
-    EF_DEPTH,
-    EF_SPEED_LIMIT,
     SI_A,
     SI_B,
 )
-from moor_env.physics.segment_contact import may_cut, segment_contact
+from moor_env.physics.segment_contact import segment_contact
 from moor_env.physics.tree import add_sym
 
 # contact set of a node during one implicit step
@@ -161,8 +158,8 @@ def contact_force_change(h, mode, depth, nx, ny, nz, wx, wy, wz, mass_kg, contac
 
 @jit_step
 def candidate(contact_set, k):
-    """Node and ``SET_*`` state of entry k of the step's candidate list (``state.contact_set``, the list built by
-    ``implicit_contact_set.init_contact_set``); node -1 past its end."""
+    """Node (segment) and ``SET_*`` state of entry k of the step's candidate list ``state.contact_set``
+    (``state.segment_set``; the lists built by ``implicit_contact_set.init_contact_set``); -1 past its end."""
     entry = contact_set[k]
     if entry < 0:
         return -1, SET_OUT
@@ -252,39 +249,42 @@ def contact_reaction(h, model, state):
     return any_contact
 
 
+@jit_step
+def segment_mode(h, e, nx, ny, nz, wx, wy, wz, node_inside):
+    """The step's law for a segment contact of excess e [m] (``segment_contact.segment_contact``), normal n and
+    velocity w [m/s] of its deepest point: ``SET_IN`` where it cuts in at the start of the step, ``SET_ENTERED``
+    where both nodes are outside and it reaches the anchor within the step at its present velocity (the linear law
+    from its gap), else ``SET_OUT``."""
+    if e > 0.0:
+        return SET_IN
+    if not node_inside and e - h * (wx * nx + wy * ny + wz * nz) > SEGMENT_ENTRY_M:
+        return SET_ENTERED
+    return SET_OUT
+
+
 @jit_no_refcount
 def _segment_pass(h, model, state, react):
-    """The segment contacts of the step (``physics/segment_contact.py``), each linearised as two node contacts at
-    its deepest point, one per free node with its share of the stiffness and damping (that module's docstring): a
-    segment cutting in at the start of the step stays in for the step (``SET_IN``); one with both nodes outside
-    that reaches the anchor within the step at its present velocity enters with the linear law from its gap
-    (``SET_ENTERED``). With ``react`` False: their terms into the nodes' blocks and right-hand sides
-    (:func:`assemble_contact`); with ``react`` True: the anchor's reaction to the force the solve applied to the
-    free nodes beyond the start-of-step force (:func:`contact_reaction`). Returns the net force of the segments
-    over the step [N] (zero without ``react``)."""
+    """The segment contacts of the step (``physics/segment_contact.py``; the list ``state.segment_set``, built with
+    their laws by ``implicit_contact_set.init_contact_set``), each linearised as two node contacts at its deepest
+    point, one per free node with its share of the stiffness and damping (that module's docstring). With ``react``
+    False: their terms into the nodes' blocks and right-hand sides (:func:`assemble_contact`); with ``react`` True:
+    the anchor's reaction to the force the solve applied to the free nodes beyond the start-of-step force
+    (:func:`contact_reaction`). Returns the net force of the segments over the step [N] (zero without
+    ``react``)."""
     seg_i = state.seg_i
+    segment_set = state.segment_set
     p = state.node_pos
     v = state.node_vel
     dv = state.node_acc
-    shape = model.contact_shape
-    seabed_z = -model.env_f[EF_DEPTH]
     net_x = net_y = net_z = 0.0
-    radius = bounding_radius_m(shape)
-    reach = 2.0 * h * model.env_f[EF_SPEED_LIMIT]  # as far as a node and the anchor can close in on each other
-    for s in range(seg_i.shape[0] if model.contact_f[CF_SEGMENTS] != 0.0 else 0):
-        if not may_cut(p, state.node_i, seg_i, s, state.body_state, shape, seabed_z, radius, reach):
-            continue
+    for k in range(segment_set.shape[0]):
+        s, mode = candidate(segment_set, k)
+        if s < 0:
+            break
         a = seg_i[s, SI_A]
         b = seg_i[s, SI_B]
-        e, fx, fy, fz, px, py, pz, nx, ny, nz, wx, wy, wz, mass, _, wa, wb, node_inside = segment_contact(
-            p, v, state.node_i, state.node_mass, a, b, state.body_state, shape, model.contact_f)
-        if wa + wb <= 0.0:
-            continue
-        mode = SET_IN if e > 0.0 else SET_OUT
-        if mode == SET_OUT and not node_inside and e - h * (wx * nx + wy * ny + wz * nz) > SEGMENT_ENTRY_M:
-            mode = SET_ENTERED
-        if mode == SET_OUT:
-            continue
+        e, fx, fy, fz, px, py, pz, nx, ny, nz, wx, wy, wz, mass, _, wa, wb, _ = segment_contact(
+            p, v, state.node_i, state.node_mass, a, b, state.body_state, model.contact_shape, model.contact_f)
         if not react:
             terms = contact_terms(h, mode, e, nx, ny, nz, wx, wy, wz, mass, model.contact_f, 0.0, 0.0, 0.0)
             for n, w in ((a, wa), (b, wb)):

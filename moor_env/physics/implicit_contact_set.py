@@ -10,6 +10,8 @@ linearised law (``physics/implicit_contact.py``) during the step.
   reach the anchor within the step; the solves test only them. Storage: ``state.contact_set`` holds the
   candidates in node order, each as node << ``SET_BITS`` | its ``SET_*`` state, the list ended by -1 where it
   is shorter than the nodes.
+- The segments in contact during the step (``physics/segment_contact.py``) are listed once per step with their law,
+  in ``state.segment_set`` (:func:`init_segment_set`): the step's assembly and reaction visit only them.
 """
 
 from __future__ import annotations
@@ -30,14 +32,19 @@ from moor_env.physics.implicit_contact import (
     candidate,
     contact_state,
     predicted_depth,
+    segment_mode,
 )
 from moor_env.physics.layout import (
     BS_POS,
+    CF_SEGMENTS,
     EF_DEPTH,
     EF_SPEED_LIMIT,
     NI_KIND,
     NODE_FREE,
+    SI_A,
+    SI_B,
 )
+from moor_env.physics.segment_contact import may_cut, segment_contact
 
 DEPTH_TOLERANCE_M = 1e-6  # a node must miss its predicted set by this much before the step is solved again
 # a node this close to the anchor counts as resting on it, its explicit load counted in its landing (h^2 a off a
@@ -109,6 +116,47 @@ def init_contact_set(h, model, state):
         k += 1
     if k < contact_set.shape[0]:
         contact_set[k] = -1
+    init_segment_set(h, model, state)
+
+
+@jit_no_refcount
+def init_segment_set(h, model, state):
+    """Start of a step: the segments in contact during it, each with its law (``implicit_contact.segment_mode``),
+    into ``state.segment_set`` (segment << ``SET_BITS`` | its state, ended by -1 where shorter than the segments);
+    the step's passes over the segment contacts (``implicit_contact._segment_pass``) visit only these. Broad
+    phase: ``segment_contact.may_cut`` grown by the farthest a segment and the anchor close in within an accepted
+    step (2 h v_limit), then by the farthest this segment's nodes move against the anchor's points at their present
+    velocities (h max |w|: the deepest point moves at the nodes' relative velocities interpolated, no faster)."""
+    segment_set = state.segment_set
+    seg_i = state.seg_i
+    p = state.node_pos
+    v = state.node_vel
+    body_state = state.body_state
+    shape = model.contact_shape
+    seabed_z = -model.env_f[EF_DEPTH]
+    radius = bounding_radius_m(shape)
+    far = 2.0 * h * model.env_f[EF_SPEED_LIMIT]
+    k = 0
+    for s in range(seg_i.shape[0] if model.contact_f[CF_SEGMENTS] != 0.0 else 0):
+        if not may_cut(p, state.node_i, seg_i, s, body_state, shape, seabed_z, radius, far):
+            continue
+        a = seg_i[s, SI_A]
+        b = seg_i[s, SI_B]
+        speed2 = 0.0
+        for n in (a, b):
+            wx, wy, wz = relative_velocity(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2], body_state)
+            speed2 = max(speed2, wx * wx + wy * wy + wz * wz)
+        if not may_cut(p, state.node_i, seg_i, s, body_state, shape, seabed_z, radius, h * math.sqrt(speed2)):
+            continue
+        e, _, _, _, _, _, _, nx, ny, nz, wx, wy, wz, _, _, wa, wb, node_inside = segment_contact(
+            p, v, state.node_i, state.node_mass, a, b, body_state, shape, model.contact_f)
+        mode = segment_mode(h, e, nx, ny, nz, wx, wy, wz, node_inside)
+        if wa + wb <= 0.0 or mode == SET_OUT:
+            continue
+        segment_set[k] = (s << SET_BITS) | mode
+        k += 1
+    if k < segment_set.shape[0]:
+        segment_set[k] = -1
 
 
 @jit_no_refcount

@@ -92,6 +92,7 @@ WORK_FIELDS: tuple[Field, ...] = (
     Field("top_tension", F8, 1, ("lines",)),  # each line's load on its vessel [N]
     Field("contact_out", F8, 1, (N_CONTACT_OUT,)),  # what the line-anchor contact did (CO_*)
     Field("contact_set", I8, 1, ("nodes",)),  # implicit step: its contact candidates (implicit_contact_set)
+    Field("segment_set", I8, 1, ("segs",)),  # implicit step: its segments in contact (implicit_contact_set)
 )
 
 MODEL_NAMES = tuple(f.name for f in MODEL_FIELDS)

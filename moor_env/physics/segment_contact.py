@@ -98,8 +98,9 @@ def may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, body_radius
     gy = my - body_state[BS_POS + 1]
     gz = mz - body_state[BS_POS + 2]
     half2 = 0.25 * (dx * dx + dy * dy + dz * dz)
+    reach_m = body_radius_m + margin_m
     # (R + h)^2 <= 2 R^2 + 2 h^2: the broad phase without a square root (most segments lie far from the anchor)
-    if gx * gx + gy * gy + gz * gz > 2.0 * (body_radius_m * body_radius_m + half2):
+    if gx * gx + gy * gy + gz * gz > 2.0 * (reach_m * reach_m + half2):
         return False
     if node_i[a, NI_KIND] != NODE_FREE and node_i[b, NI_KIND] != NODE_FREE:
         return False
