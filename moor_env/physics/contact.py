@@ -46,6 +46,7 @@ import math
 
 from moor_env.physics._jit import jit
 from moor_env.physics.anchor_surface import bounding_radius_m, from_cog, surface_distance, within_reach
+from moor_env.physics.contact_broadphase import listed
 from moor_env.physics.layout import (
     BS_OMEGA,
     BS_POS,
@@ -245,7 +246,7 @@ def add_contact_reaction(load, body_state, px, py, pz, fx, fy, fz):
 
 @jit
 def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_state, shape, contact_f, contact_out,
-                      seabed_z):
+                      seabed_z, near_nodes, listed_on):
     """Add the contact force of every free node inside the anchor to ``node_force`` and record the nodes inside in
     ``contact_out`` (``CO_NODES``, ``CO_DEPTH``, ``CO_PEAK_DEPTH``; the force: :func:`record_contact_force`);
     returns the reaction on the anchor (F [N], M about the COG [N m]) as six floats.
@@ -253,7 +254,8 @@ def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_st
     The node's mass in the damping is its structural mass (``node_mass``, welded parts included); its added mass
     (a few % for chain) only makes the contact slightly softer and less damped than chosen. Nodes below the seabed
     (``seabed_z`` [m]) are left to the seabed (:func:`may_touch`). Broad phase: one distance to the anchor's COG
-    per node against the sphere that holds the anchor (most of a line lies far from it).
+    per node against the sphere that holds the anchor (most of a line lies far from it), over the nodes listed
+    near the anchor in ``near_nodes`` where ``listed_on`` (``contact_broadphase``), else over all.
     """
     lx = ly = lz = mx = my = mz = 0.0
     count = 0
@@ -262,7 +264,10 @@ def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_st
     gx = body_state[BS_POS]
     gy = body_state[BS_POS + 1]
     gz = body_state[BS_POS + 2]
-    for n in range(node_i.shape[0]):
+    for k in range(node_i.shape[0]):
+        n = listed(near_nodes, listed_on, k)
+        if n < 0:
+            break
         dx = node_pos[n, 0] - gx
         dy = node_pos[n, 1] - gy
         dz = node_pos[n, 2] - gz

@@ -26,6 +26,7 @@ import math
 
 from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.anchor import body_point, rotate_axis
+from moor_env.physics.contact_broadphase import note_moved, prepare_near
 from moor_env.physics.implicit import implicit_euler_update
 from moor_env.physics.layout import (
     BF_ACTIVE,
@@ -34,6 +35,7 @@ from moor_env.physics.layout import (
     BS_OMEGA,
     BS_POS,
     BS_VEL,
+    CF_ON,
     EF_DEPTH,
     EF_SPEED_LIMIT,
     EF_STRAIN_LIMIT,
@@ -120,6 +122,9 @@ def step(model, state, t, dt, integrator, same_topology):
     body_acc, pos0, vel0 = state.body_acc, state.pos0, state.vel0
     body0 = state.body0
     body_active = model.body_f[BF_ACTIVE] != 0.0
+    near = body_active and model.contact_f[CF_ON] != 0.0 and integrator != INTEGRATOR_RK2
+    if near:
+        prepare_near(model, state, same_topology)
     if integrator == INTEGRATOR_IMPLICIT_EULER:
         args_strain = compute_loads(model, state)
     else:
@@ -184,6 +189,8 @@ def step(model, state, t, dt, integrator, same_topology):
             rotate_axis(body_state, body0[BS_AXIS:BS_AXIS + 3], wx, wy, wz, dt)
             for c in range(3):
                 body_v2 += body_state[BS_VEL + c] ** 2
+    if near:
+        note_moved(state, dt, vmax2, body_v2)
     set_constrained_nodes(model, state, t + dt)
     apply_payout(dt, node_pos, node_vel, node_i, state.seg_i, state.seg_f, state.line_i, state.line_f)
     if max_strain != max_strain:

@@ -133,6 +133,11 @@ CO_PEAK_DEPTH = 4  # its running maximum (reset at the release) [m]
 CO_SEGMENTS = 5  # segments cutting into it deeper than their nodes (physics/segment_contact.py), last evaluation
 N_CONTACT_OUT = 6
 
+# near_skin slots: the contact's list of what lies near the anchor (physics/contact_broadphase.py)
+NEAR_ON = 0  # 1 while the step's load evaluation uses the lists
+NEAR_MOVED_M = 1  # how far the nodes and the COG can have closed on each other since the lists were built [m]
+N_NEAR = 2
+
 # contact_shape columns: the anchor's surface as coaxial cylinders (physics/contact.py)
 CS_FRONT = 0  # axial coordinate of the end towards the tip, from the COG [m]
 CS_BACK = 1  # axial coordinate of the end towards the back [m]

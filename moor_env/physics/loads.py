@@ -19,6 +19,7 @@ from moor_env.physics.layout import (
     CF_ON,
     EF_DEPTH,
     EF_SEABED_SMOOTHING,
+    NEAR_ON,
     NF_BODY_S,
     NI_KIND,
     NI_REF,
@@ -143,11 +144,13 @@ def compute_loads(model, state):
             body_load[c] = 0.0
         body_loads(body_state, body_f, body_q, env_f, current_profile, body_load)
         if model.contact_f[CF_ON] != 0.0:
+            listed_on = state.near_skin[NEAR_ON] != 0.0
             reaction = add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_state,
-                                         model.contact_shape, model.contact_f, state.contact_out, -env_f[EF_DEPTH])
+                                         model.contact_shape, model.contact_f, state.contact_out, -env_f[EF_DEPTH],
+                                         state.near_nodes, listed_on)
             segments = add_segment_contact_loads(node_pos, node_vel, node_i, node_mass, state.seg_i, node_force,
                                                  body_state, model.contact_shape, model.contact_f, -env_f[EF_DEPTH],
-                                                 state.contact_out)
+                                                 state.contact_out, state.near_segs, listed_on)
             for c in range(6):
                 body_load[c] += reaction[c] + segments[c]
             record_contact_force(state.contact_out, reaction[0] + segments[0], reaction[1] + segments[1],

@@ -32,7 +32,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from moor_env.physics.layout import N_BODY_STATE, N_CONTACT_OUT, N_HIST, N_TD
+from moor_env.physics.layout import N_BODY_STATE, N_CONTACT_OUT, N_HIST, N_NEAR, N_TD
 
 HISTORY_CAPACITY = 20000  # rows of the tip history a simulator records
 
@@ -93,6 +93,9 @@ WORK_FIELDS: tuple[Field, ...] = (
     Field("contact_out", F8, 1, (N_CONTACT_OUT,)),  # what the line-anchor contact did (CO_*)
     Field("contact_set", I8, 1, ("nodes",)),  # implicit step: its contact candidates (implicit_contact_set)
     Field("segment_set", I8, 1, ("segs",)),  # implicit step: its segments in contact (implicit_contact_set)
+    Field("near_nodes", I8, 1, ("nodes",)),  # the free nodes near the anchor (contact_broadphase)
+    Field("near_segs", I8, 1, ("segs",)),  # the segments near it
+    Field("near_skin", F8, 1, (N_NEAR,)),  # whether the lists are in use, how far they can be out of date (NEAR_*)
 )
 
 MODEL_NAMES = tuple(f.name for f in MODEL_FIELDS)

@@ -52,6 +52,7 @@ from moor_env.physics.anchor_surface import (
     surface_distance,
 )
 from moor_env.physics.contact import law_at, relative_velocity
+from moor_env.physics.contact_broadphase import listed
 from moor_env.physics.layout import (
     BS_POS,
     CF_SEGMENTS,
@@ -296,17 +297,21 @@ def segment_contact(node_pos, node_vel, node_i, node_mass, a, b, body_state, sha
 
 @jit
 def add_segment_contact_loads(node_pos, node_vel, node_i, node_mass, seg_i, node_force, body_state, shape,
-                              contact_f, seabed_z, contact_out):
+                              contact_f, seabed_z, contact_out, near_segs, listed_on):
     """Add every segment contact's force (module docstring) to its nodes' ``node_force`` (shares 1 - t and t, to
     the free ones: :func:`free_shares`) and count the segments in ``contact_out`` (``CO_SEGMENTS``),
-    where ``contact_f`` has the segments' contact on (``CF_SEGMENTS``);
+    where ``contact_f`` has the segments' contact on (``CF_SEGMENTS``), over the segments listed near the anchor in
+    ``near_segs`` where ``listed_on`` (``contact_broadphase``), else over all;
     returns the reaction on the anchor, the opposite of the force at p* (F [N], M about the COG [N m], six
     floats), and the deepest excess [m]."""
     lx = ly = lz = mx = my = mz = 0.0
     deepest = 0.0
     count = 0
     radius = bounding_radius_m(shape)
-    for s in range(seg_i.shape[0] if contact_f[CF_SEGMENTS] != 0.0 else 0):
+    for k in range(seg_i.shape[0] if contact_f[CF_SEGMENTS] != 0.0 else 0):
+        s = listed(near_segs, listed_on, k)
+        if s < 0:
+            break
         if not may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, radius, 0.0):
             continue
         a = seg_i[s, SI_A]

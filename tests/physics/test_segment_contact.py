@@ -14,6 +14,7 @@ from moor_env.physics import segment_contact as G
 from tests.physics.test_contact import MASS_KG, RADIUS_M, S_BACK_M, SHAPE, body, params, point
 
 DT_S = 2e-4
+ALL = np.full(1, -1, np.int64)  # no list of segments near the anchor: the passes visit all
 
 
 def _rim_segment(state):
@@ -100,7 +101,7 @@ def test_shares_and_the_reaction_on_the_body():
         node_vel = np.zeros((2, 3))
         node_force = np.zeros((2, 3))
         load = G.add_segment_contact_loads(node_pos, node_vel, node_i, np.full(2, MASS_KG), seg_i, node_force,
-                                           state, SHAPE, cf, -1e9, np.zeros(L.N_CONTACT_OUT))
+                                           state, SHAPE, cf, -1e9, np.zeros(L.N_CONTACT_OUT), ALL, False)
         e, fx, fy, fz, px, py, pz, *_rest = G.segment_contact(node_pos, node_vel, node_i, np.full(2, MASS_KG), 0,
                                                               1, state, SHAPE, cf)
         f = np.array([fx, fy, fz])
@@ -126,7 +127,7 @@ def _drop_across_the_shaft(restitution, v_in=5.0, steps=6000):
     for _ in range(steps):
         force = np.zeros((2, 3))
         load = G.add_segment_contact_loads(node_pos, node_vel, node_i, mass, seg_i, force, state, SHAPE, cf, -1e9,
-                                           out)
+                                           out, ALL, False)
         excess.append(load[6])
         impulse += force.sum(axis=0) * DT_S
         node_vel += force / MASS_KG * DT_S
