@@ -25,8 +25,13 @@ import math
 
 from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.anchor_surface import surface_distance
-from moor_env.physics.contact import add_contact_reaction, contact_force, record_contact_force, relative_velocity
+from moor_env.physics.contact import add_contact_reaction, law_at, record_contact_force, relative_velocity
 from moor_env.physics.layout import (
+    CC_DEPTH,
+    CC_FORCE,
+    CC_NORMAL,
+    CC_READY,
+    CC_VEL,
     CF_MU,
     CF_STICK_SPEED,
     CF_STIFFNESS,
@@ -56,6 +61,36 @@ def contact_state(px, py, pz, vx, vy, vz, body_state, shape):
     sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(px, py, pz, body_state, shape)
     wx, wy, wz = relative_velocity(px, py, pz, vx, vy, vz, body_state)
     return -sd, nx, ny, nz, wx, wy, wz
+
+
+@jit_step
+def start_state(model, state, k, n):
+    """:func:`contact_state` of candidate k (node n) at the start of the step and its contact force there [N]
+    (the load law's, ``contact.law_at``; zero outside), computed at its first use in the step and kept in
+    ``state.contact_cache`` (``CC_*``): the step's solves and its reaction read it again."""
+    cache = state.contact_cache
+    if cache[k, CC_READY] == 0.0:
+        p = state.node_pos
+        v = state.node_vel
+        depth, nx, ny, nz, wx, wy, wz = contact_state(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2],
+                                                      state.body_state, model.contact_shape)
+        fx = fy = fz = 0.0
+        if depth > 0.0:
+            fx, fy, fz = law_at(depth, nx, ny, nz, wx, wy, wz, state.node_mass[n], model.contact_f)[:3]
+        cache[k, CC_READY] = 1.0
+        cache[k, CC_DEPTH] = depth
+        cache[k, CC_NORMAL] = nx
+        cache[k, CC_NORMAL + 1] = ny
+        cache[k, CC_NORMAL + 2] = nz
+        cache[k, CC_VEL] = wx
+        cache[k, CC_VEL + 1] = wy
+        cache[k, CC_VEL + 2] = wz
+        cache[k, CC_FORCE] = fx
+        cache[k, CC_FORCE + 1] = fy
+        cache[k, CC_FORCE + 2] = fz
+    return (cache[k, CC_DEPTH], cache[k, CC_NORMAL], cache[k, CC_NORMAL + 1], cache[k, CC_NORMAL + 2],
+            cache[k, CC_VEL], cache[k, CC_VEL + 1], cache[k, CC_VEL + 2], cache[k, CC_FORCE],
+            cache[k, CC_FORCE + 1], cache[k, CC_FORCE + 2])
 
 
 @jit_step
@@ -181,8 +216,6 @@ def assemble_contact(h, model, state):
     """Add every candidate's contact terms (:func:`contact_terms`) to its block (``node_mm``) and right-hand side
     (``node_acc``), after the lines' assembly."""
     contact_set = state.contact_set
-    p = state.node_pos
-    v = state.node_vel
     node_mm = state.node_mm
     node_acc = state.node_acc
     for k in range(contact_set.shape[0]):
@@ -192,13 +225,9 @@ def assemble_contact(h, model, state):
         mode = _law_mode(mode)
         if mode == SET_OUT:
             continue
-        depth, nx, ny, nz, wx, wy, wz = contact_state(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2],
-                                                         state.body_state, model.contact_shape)
-        f0x = f0y = f0z = 0.0
-        if mode == SET_LEFT:
-            _, f0x, f0y, f0z = contact_force(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2],
-                                             state.node_mass[n], state.body_state, model.contact_shape,
-                                             model.contact_f)
+        depth, nx, ny, nz, wx, wy, wz, f0x, f0y, f0z = start_state(model, state, k, n)
+        if mode != SET_LEFT:
+            f0x = f0y = f0z = 0.0
         bxx, byy, bzz, bxy, bxz, byz, rx, ry, rz = contact_terms(h, mode, depth, nx, ny, nz, wx, wy, wz,
                                                                  state.node_mass[n], model.contact_f, f0x, f0y,
                                                                  f0z)
@@ -216,7 +245,6 @@ def contact_reaction(h, model, state):
     (``contact_out``); returns whether any node was in contact."""
     contact_set = state.contact_set
     p = state.node_pos
-    v = state.node_vel
     dv = state.node_acc
     load = state.body_load
     any_contact = False
@@ -229,13 +257,9 @@ def contact_reaction(h, model, state):
         if mode == SET_OUT:
             continue
         any_contact = True
-        depth, nx, ny, nz, wx, wy, wz = contact_state(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2],
-                                                      state.body_state, model.contact_shape)
-        f0x = f0y = f0z = 0.0
-        if mode == SET_IN or mode == SET_LEFT:
-            _, f0x, f0y, f0z = contact_force(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2],
-                                             state.node_mass[n], state.body_state, model.contact_shape,
-                                             model.contact_f)
+        depth, nx, ny, nz, wx, wy, wz, f0x, f0y, f0z = start_state(model, state, k, n)
+        if mode != SET_IN and mode != SET_LEFT:
+            f0x = f0y = f0z = 0.0
         fx, fy, fz = contact_force_change(h, mode, depth, nx, ny, nz, wx, wy, wz, state.node_mass[n],
                                           model.contact_f, dv[n, 0], dv[n, 1], dv[n, 2], f0x, f0y, f0z)
         add_contact_reaction(load, state.body_state, p[n, 0], p[n, 1], p[n, 2], fx, fy, fz)

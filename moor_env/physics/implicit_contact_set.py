@@ -30,12 +30,13 @@ from moor_env.physics.implicit_contact import (
     SET_MISSED,
     SET_OUT,
     candidate,
-    contact_state,
     predicted_depth,
     segment_mode,
+    start_state,
 )
 from moor_env.physics.layout import (
     BS_POS,
+    CC_READY,
     CF_SEGMENTS,
     EF_DEPTH,
     EF_SPEED_LIMIT,
@@ -44,7 +45,7 @@ from moor_env.physics.layout import (
     SI_A,
     SI_B,
 )
-from moor_env.physics.segment_contact import may_cut, segment_contact
+from moor_env.physics.segment_contact import may_cut, near_sphere, segment_contact
 
 DEPTH_TOLERANCE_M = 1e-6  # a node must miss its predicted set by this much before the step is solved again
 # a node this close to the anchor counts as resting on it, its explicit load counted in its landing (h^2 a off a
@@ -113,6 +114,7 @@ def init_contact_set(h, model, state):
                 if predicted_depth(h, -sd, nx, ny, nz, wx, wy, wz, dx, dy, dz) > DEPTH_TOLERANCE_M:
                     mode = SET_COMING
         contact_set[k] = (n << SET_BITS) | mode
+        state.contact_cache[k, CC_READY] = 0.0
         k += 1
     if k < contact_set.shape[0]:
         contact_set[k] = -1
@@ -124,9 +126,10 @@ def init_segment_set(h, model, state):
     """Start of a step: the segments in contact during it, each with its law (``implicit_contact.segment_mode``),
     into ``state.segment_set`` (segment << ``SET_BITS`` | its state, ended by -1 where shorter than the segments);
     the step's passes over the segment contacts (``implicit_contact._segment_pass``) visit only these. Broad
-    phase: ``segment_contact.may_cut`` grown by the farthest a segment and the anchor close in within an accepted
-    step (2 h v_limit), then by the farthest this segment's nodes move against the anchor's points at their present
-    velocities (h max |w|: the deepest point moves at the nodes' relative velocities interpolated, no faster)."""
+    phase: the anchor's bounding sphere grown by the farthest a segment and the anchor close in within an accepted
+    step (2 h v_limit, ``segment_contact.near_sphere``), then ``segment_contact.may_cut`` grown by the farthest this
+    segment's nodes move against the anchor's points at their present velocities (h max |w|: the deepest point
+    moves at the nodes' relative velocities interpolated, no faster)."""
     segment_set = state.segment_set
     seg_i = state.seg_i
     p = state.node_pos
@@ -138,7 +141,7 @@ def init_segment_set(h, model, state):
     far = 2.0 * h * model.env_f[EF_SPEED_LIMIT]
     k = 0
     for s in range(seg_i.shape[0] if model.contact_f[CF_SEGMENTS] != 0.0 else 0):
-        if not may_cut(p, state.node_i, seg_i, s, body_state, shape, seabed_z, radius, far):
+        if not near_sphere(p, seg_i, s, body_state, radius + far):
             continue
         a = seg_i[s, SI_A]
         b = seg_i[s, SI_B]
@@ -180,8 +183,7 @@ def update_contact_set(h, model, state):
                      + math.sqrt(dv[n, 0] * dv[n, 0] + dv[n, 1] * dv[n, 1] + dv[n, 2] * dv[n, 2]))
         if not within_reach(p[n, 0], p[n, 1], p[n, 2], state.body_state, model.contact_shape, reach):
             continue
-        depth, nx, ny, nz, wx, wy, wz = contact_state(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2],
-                                                      state.body_state, model.contact_shape)
+        depth, nx, ny, nz, wx, wy, wz = start_state(model, state, k, n)[:7]
         end = predicted_depth(h, depth, nx, ny, nz, wx, wy, wz, dv[n, 0], dv[n, 1], dv[n, 2])
         if (mode == SET_OUT or mode == SET_MISSED) and end > DEPTH_TOLERANCE_M:
             mode = SET_ENTERED

@@ -133,6 +133,14 @@ CO_PEAK_DEPTH = 4  # its running maximum (reset at the release) [m]
 CO_SEGMENTS = 5  # segments cutting into it deeper than their nodes (physics/segment_contact.py), last evaluation
 N_CONTACT_OUT = 6
 
+# contact_cache columns: a contact candidate's start-of-step state in the implicit step (implicit_contact.py)
+CC_READY = 0  # 1 once computed in this step
+CC_DEPTH = 1  # depth [m] (negative: gap)
+CC_NORMAL = 2  # outward normal (3)
+CC_VEL = 5  # velocity relative to the anchor's point there (3) [m/s]
+CC_FORCE = 8  # the contact force at the start of the step (3) [N]
+N_CONTACT_CACHE = 11
+
 # near_skin slots: the contact's list of what lies near the anchor (physics/contact_broadphase.py)
 NEAR_ON = 0  # 1 while the step's load evaluation uses the lists
 NEAR_MOVED_M = 1  # how far the nodes and the COG can have closed on each other since the lists were built [m]

@@ -32,7 +32,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from moor_env.physics.layout import N_BODY_STATE, N_CONTACT_OUT, N_HIST, N_NEAR, N_TD
+from moor_env.physics.layout import N_BODY_STATE, N_CONTACT_CACHE, N_CONTACT_OUT, N_HIST, N_NEAR, N_TD
 
 HISTORY_CAPACITY = 20000  # rows of the tip history a simulator records
 
@@ -92,6 +92,7 @@ WORK_FIELDS: tuple[Field, ...] = (
     Field("top_tension", F8, 1, ("lines",)),  # each line's load on its vessel [N]
     Field("contact_out", F8, 1, (N_CONTACT_OUT,)),  # what the line-anchor contact did (CO_*)
     Field("contact_set", I8, 1, ("nodes",)),  # implicit step: its contact candidates (implicit_contact_set)
+    Field("contact_cache", F8, 2, ("nodes", N_CONTACT_CACHE)),  # implicit step: its candidates' state (CC_*)
     Field("segment_set", I8, 1, ("segs",)),  # implicit step: its segments in contact (implicit_contact_set)
     Field("near_nodes", I8, 1, ("nodes",)),  # the free nodes near the anchor (contact_broadphase)
     Field("near_segs", I8, 1, ("segs",)),  # the segments near it

@@ -72,6 +72,24 @@ KINK_PROBE_M = 1e-6  # how far to either side of the deepest point the normals a
 
 
 @jit(inline="always")  # called once per segment per load evaluation: inlined, its array arguments stay in place
+def near_sphere(node_pos, seg_i, s, body_state, reach_m):
+    """Whether active segment s may reach into the sphere of radius ``reach_m`` [m] about the anchor's COG: its
+    midpoint within half its length of it, tested as |m - r_G|^2 <= 2 (R^2 + (l / 2)^2) (>= (R + l / 2)^2: no
+    square root; most segments lie far from the anchor)."""
+    if seg_i[s, SI_ACTIVE] == 0:
+        return False
+    a = seg_i[s, SI_A]
+    b = seg_i[s, SI_B]
+    dx = node_pos[b, 0] - node_pos[a, 0]
+    dy = node_pos[b, 1] - node_pos[a, 1]
+    dz = node_pos[b, 2] - node_pos[a, 2]
+    gx = node_pos[a, 0] + 0.5 * dx - body_state[BS_POS]
+    gy = node_pos[a, 1] + 0.5 * dy - body_state[BS_POS + 1]
+    gz = node_pos[a, 2] + 0.5 * dz - body_state[BS_POS + 2]
+    return gx * gx + gy * gy + gz * gz <= 2.0 * (reach_m * reach_m + 0.25 * (dx * dx + dy * dy + dz * dz))
+
+
+@jit(inline="always")  # called once per segment per load evaluation: inlined, its array arguments stay in place
 def may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, body_radius_m, margin_m):
     """Whether active segment s can cut into the anchor (cheap tests before :func:`segment_geometry`): its
     midpoint within half its length of the sphere that holds the anchor (``body_radius_m`` [m] about its COG,
@@ -85,24 +103,10 @@ def may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, body_radius
     most of its length. On gjoa-500 at 170 m spacing (fast preset, 1 m vertical chain segments) that pushed the
     anchor with 1.3 MN and tilted it 1.0 deg at touchdown, against no tilt with 0.5 m segments, where the chain's
     nodes carry the contact (0.49 MN)."""
-    if seg_i[s, SI_ACTIVE] == 0:
+    if not near_sphere(node_pos, seg_i, s, body_state, body_radius_m + margin_m):
         return False
     a = seg_i[s, SI_A]
     b = seg_i[s, SI_B]
-    dx = node_pos[b, 0] - node_pos[a, 0]
-    dy = node_pos[b, 1] - node_pos[a, 1]
-    dz = node_pos[b, 2] - node_pos[a, 2]
-    mx = node_pos[a, 0] + 0.5 * dx
-    my = node_pos[a, 1] + 0.5 * dy
-    mz = node_pos[a, 2] + 0.5 * dz
-    gx = mx - body_state[BS_POS]
-    gy = my - body_state[BS_POS + 1]
-    gz = mz - body_state[BS_POS + 2]
-    half2 = 0.25 * (dx * dx + dy * dy + dz * dz)
-    reach_m = body_radius_m + margin_m
-    # (R + h)^2 <= 2 R^2 + 2 h^2: the broad phase without a square root (most segments lie far from the anchor)
-    if gx * gx + gy * gy + gz * gz > 2.0 * (reach_m * reach_m + half2):
-        return False
     if node_i[a, NI_KIND] != NODE_FREE and node_i[b, NI_KIND] != NODE_FREE:
         return False
     if node_i[a, NI_KIND] == NODE_BODY or node_i[b, NI_KIND] == NODE_BODY:
