@@ -276,10 +276,13 @@ def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_st
         px = node_pos[n, 0]
         py = node_pos[n, 1]
         pz = node_pos[n, 2]
-        depth, fx, fy, fz = contact_force(px, py, pz, node_vel[n, 0], node_vel[n, 1], node_vel[n, 2], node_mass[n],
-                                          body_state, shape, contact_f)
-        if depth == 0.0:
+        # contact_force's law, its reach test done above and nothing computed for a node outside
+        sd, nx, ny, nz = surface_distance(px, py, pz, body_state, shape)[:4]
+        if sd >= 0.0:
             continue
+        depth = -sd
+        wx, wy, wz = relative_velocity(px, py, pz, node_vel[n, 0], node_vel[n, 1], node_vel[n, 2], body_state)
+        fx, fy, fz = law_at(depth, nx, ny, nz, wx, wy, wz, node_mass[n], contact_f)[:3]
         count += 1
         deepest = max(deepest, depth)
         node_force[n, 0] += fx
