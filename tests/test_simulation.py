@@ -201,9 +201,11 @@ def test_coarse_start_solves_the_fine_lines():
 
 
 def test_coarse_start_refuses_a_fibre_the_coarse_lines_lay_on_the_seabed(monkeypatch):
-    """Where the coarse compile's equilibrium lays the fibre rope on the seabed and the fine lines do not converge
-    from it, the coarse start refuses the scene with that cause and key (NoEquilibrium) instead of returning None
-    (which would go on to a last full solve); where the fine lines converge, their own equilibrium is returned."""
+    """Where the coarse compile's equilibrium lays the fibre rope on the seabed (here one node, 0.08 mm into it) and
+    the fine lines do not converge from it, the coarse start keeps the refusal with that cause and key for after the
+    next start (``pending``, None returned); with ``REFUSED_FROM_NODES`` nodes or more it raises it at once
+    (NoEquilibrium) instead of returning None (which would go on to a last full solve); where the fine lines
+    converge, their own equilibrium is returned."""
     from moor_env import Simulator, compile_scene
     from moor_env import coarse_start as coarse_module
     from moor_env.errors import NoEquilibrium, StaticsNotConverged
@@ -222,11 +224,16 @@ def test_coarse_start_refuses_a_fibre_the_coarse_lines_lay_on_the_seabed(monkeyp
         return solve(*args, **kwargs)
 
     monkeypatch.setattr(coarse_module, "solve_equilibrium", mapped_start_stalls)
-    sim = Simulator(compile_scene(load_scene("gjoa-500", long_line)))
-    with pytest.raises(NoEquilibrium) as refused:
-        _coarse_start(sim).start(progress=False)
-    assert refused.value.key == "installation.mooring_line_length_m"
-    assert refused.value.cause.startswith("the fibre rope") and "fast preset" in refused.value.cause
+    start = _coarse_start(Simulator(compile_scene(load_scene("gjoa-500", long_line))))
+    assert start.start(progress=False) is None
+    assert start.fibre_resting == 1
+    assert start.pending.key == "installation.mooring_line_length_m"
+    assert start.pending.cause.startswith("the fibre rope") and "fast preset" in start.pending.cause
+    monkeypatch.setattr(coarse_module, "REFUSED_FROM_NODES", 1)
+    with pytest.raises(NoEquilibrium) as raised:
+        _coarse_start(Simulator(compile_scene(load_scene("gjoa-500", long_line)))).start(progress=False)
+    assert raised.value.key == "installation.mooring_line_length_m"
+    assert raised.value.cause.startswith("the fibre rope") and "fast preset" in raised.value.cause
 
 
 # The statics benchmark's scene 423 (seed 0), rounded: its coarse equilibrium rests one fibre node on the seabed,
@@ -278,6 +285,32 @@ def test_one_coarse_fibre_node_on_the_seabed_does_not_refuse_the_scene():
     assert fibre_on_seabed(guess)[1] <= GUESS_NEAR_SEABED_M
     coarse = _coarse_start(Simulator(model)).equilibrium()
     assert fibre_on_seabed(coarse.simulator)[0] == 1
+    result = solve_statics(model, progress=False)
+    resting, lowest_m = fibre_on_seabed(result.simulator)
+    assert resting == 0 and 0.0 < lowest_m < 0.5
+
+
+# The statics benchmark's scene 623 (seed 0), rounded: the fast preset's equilibrium rests one fibre node 0.1 mm
+# into the seabed, the default preset's hangs the fibre 6 cm clear, and the lines (fast preset fitted to a 0.5 m
+# loop chain) converge from neither within their budgets but from the first guess in 224 iterations.
+FIBRE_BARELY_ON_THE_SEABED = {"water_depth_m": 1131.22, "vessel_spacing_m": 323.57, "mooring_line_length_m": 1365.45,
+                              "vertical_chain_length_m": 6.5, "drop_height_m": 89.8, "current_scale": 1.05,
+                              "current_direction_deg": 330.86, "anchor_mass_scale": 0.91, "fidelity": "fast"}
+
+
+def test_fibre_the_middle_preset_hangs_clear_is_not_refused():
+    """Reference: the scene's own lines solved from the first guess without the refusals (Newton's method, 3000
+    iterations) hang the fibre rope clear of the seabed. ``solve_statics`` solves it too (no NoEquilibrium from the
+    fast preset's one resting node, which the default preset's equilibrium overrules), with the fibre clear."""
+    from moor_env import Simulator, compile_scene
+    from moor_env.physics.statics import solve_equilibrium
+    from moor_env.physics.statics_checks import fibre_on_seabed
+
+    model = compile_scene(load_scene("gjoa-500", FIBRE_BARELY_ON_THE_SEABED))
+    own = Simulator(model)
+    solve_equilibrium(own, progress=False, method="newton", max_iter=3000)
+    assert fibre_on_seabed(own)[0] == 0
+    assert fibre_on_seabed(_coarse_start(Simulator(model)).equilibrium().simulator)[0] == 1
     result = solve_statics(model, progress=False)
     resting, lowest_m = fibre_on_seabed(result.simulator)
     assert resting == 0 and 0.0 < lowest_m < 0.5
