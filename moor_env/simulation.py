@@ -69,9 +69,9 @@ def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool):
     whose coarse equilibrium rests several fibre nodes on it is refused first
     (:meth:`CoarseStart.refuse_fibre_on_seabed`); then Newton's method from the first guess gets
     ``FIRST_TRY_ITERATIONS``, then the coarse start (:meth:`CoarseStart.start`, the fast preset's equilibrium, then
-    the default preset's for lines finer than that; a refusal the fast preset's start left pending is raised where
-    both fail, unless the default preset's equilibrium hangs the fibre clear), then the first guess again with
-    ``MAX_ITERATIONS``; the relaxation fallback last.
+    the default preset's for lines finer than that; a refusal either start left pending is raised where both
+    fail, the fast preset's unless the default preset's equilibrium hangs the fibre clear), then the first guess
+    again with ``MAX_ITERATIONS``; the relaxation fallback last.
 
     Why that order: a solve from the first guess that has not converged in a few hundred iterations mostly
     stalls (with the loop resting against the anchor in current); from the coarse start most of those converge
@@ -90,15 +90,17 @@ def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool):
     for k, budget in enumerate(budgets):
         if k > 0:
             report = coarse.start(progress)
+            pending = coarse.pending
             if report is None:
                 middle = CoarseStart(sim, solve, MIDDLE_PRESET)
                 report = middle.start(progress)
                 if middle.fibre_resting == 0:  # nearer the fine lines, it hangs the fibre clear
-                    coarse.pending = None
+                    pending = None
+                pending = middle.pending or pending
             if report is not None:
                 return report
-            if coarse.pending is not None:
-                raise coarse.pending
+            if pending is not None:
+                raise pending
             sim.state = sim.model.initial_state()
         try:
             return solve_equilibrium(sim, progress=progress, method="newton", max_iter=budget,

@@ -229,6 +229,9 @@ def test_coarse_start_refuses_a_fibre_the_coarse_lines_lay_on_the_seabed(monkeyp
     assert start.fibre_resting == 1
     assert start.pending.key == "installation.mooring_line_length_m"
     assert start.pending.cause.startswith("the fibre rope") and "fast preset" in start.pending.cause
+    with pytest.raises(NoEquilibrium) as pending:  # no middle start for 1 m chain: the pending refusal is raised
+        solve_statics(load_scene("gjoa-500", long_line), progress=False, method="newton")
+    assert "fast preset" in pending.value.cause
     monkeypatch.setattr(coarse_module, "REFUSED_FROM_NODES", 1)
     with pytest.raises(NoEquilibrium) as raised:
         _coarse_start(Simulator(compile_scene(load_scene("gjoa-500", long_line)))).start(progress=False)

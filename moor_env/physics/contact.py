@@ -146,8 +146,21 @@ def contact_force(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f)
     fx, fy, fz : float
         Force on the node [N]; the body takes the opposite force at the node (:func:`add_contact_reaction`).
     """
-    out = _law(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f)
-    return out[0], out[1], out[2], out[3]
+    if not within_reach(px, py, pz, body_state, shape):
+        return 0.0, 0.0, 0.0, 0.0
+    return force_within_reach(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f)
+
+
+@jit
+def force_within_reach(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f):
+    """:func:`contact_force` of a node already found within the anchor's bounding cylinder
+    (``anchor_surface.within_reach``): nothing but the surface distance computed for a node outside the surface."""
+    sd, nx, ny, nz = surface_distance(px, py, pz, body_state, shape)[:4]
+    if sd >= 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    wx, wy, wz = relative_velocity(px, py, pz, vx, vy, vz, body_state)
+    fx, fy, fz = law_at(-sd, nx, ny, nz, wx, wy, wz, mass_kg, contact_f)[:3]
+    return -sd, fx, fy, fz
 
 
 @jit
@@ -276,13 +289,10 @@ def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_st
         px = node_pos[n, 0]
         py = node_pos[n, 1]
         pz = node_pos[n, 2]
-        # contact_force's law, its reach test done above and nothing computed for a node outside
-        sd, nx, ny, nz = surface_distance(px, py, pz, body_state, shape)[:4]
-        if sd >= 0.0:
+        depth, fx, fy, fz = force_within_reach(px, py, pz, node_vel[n, 0], node_vel[n, 1], node_vel[n, 2],
+                                               node_mass[n], body_state, shape, contact_f)
+        if depth == 0.0:
             continue
-        depth = -sd
-        wx, wy, wz = relative_velocity(px, py, pz, node_vel[n, 0], node_vel[n, 1], node_vel[n, 2], body_state)
-        fx, fy, fz = law_at(depth, nx, ny, nz, wx, wy, wz, node_mass[n], contact_f)[:3]
         count += 1
         deepest = max(deepest, depth)
         node_force[n, 0] += fx

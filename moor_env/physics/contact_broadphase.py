@@ -29,6 +29,7 @@ from moor_env.physics.anchor_surface import bounding_radius_m
 from moor_env.physics.layout import BS_POS, NEAR_MOVED_M, NEAR_ON, NI_KIND, NODE_FREE, SI_A, SI_ACTIVE, SI_B
 
 SKIN_M = 2.0  # how far beyond the anchor's bounding sphere the list reaches [m]
+ROUNDING_M = 1e-6  # the lists are rebuilt this much before the skin closes (positions are rounded at every step)
 
 
 @jit_no_refcount
@@ -36,7 +37,7 @@ def prepare_near(model, state, same_topology):
     """Before a step's load evaluation: rebuild the lists where needed (not ``same_topology``, i.e. the first step
     of a call or after a payout; the skin closed) and let the contact's passes use them (``NEAR_ON``)."""
     skin = state.near_skin
-    if not same_topology or skin[NEAR_MOVED_M] >= SKIN_M:
+    if not same_topology or not skin[NEAR_MOVED_M] < SKIN_M - ROUNDING_M:
         _build(model, state)
         skin[NEAR_MOVED_M] = 0.0
     skin[NEAR_ON] = 1.0
@@ -54,8 +55,9 @@ def note_moved(state, dt, vmax2, body_v2):
 
 @jit_no_refcount
 def _build(model, state):
-    """The free nodes and the segments within ``SKIN_M`` of the bounding sphere, in index order, into
-    ``state.near_nodes`` and ``state.near_segs`` (each ended by -1 where shorter)."""
+    """The free nodes and the segments within ``SKIN_M`` of the bounding sphere, and every segment with a node that
+    is not free, in index order, into ``state.near_nodes`` and ``state.near_segs`` (each ended by -1 where
+    shorter)."""
     p = state.node_pos
     node_i = state.node_i
     seg_i = state.seg_i

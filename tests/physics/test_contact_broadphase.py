@@ -1,8 +1,9 @@
 """The contact's list of what lies near the anchor, reused across steps (moor_env.physics.contact_broadphase).
 
 Reference: a pass over every node and segment. The list may only leave out what lies outside the anchor's
-bounding sphere, where the contact's force is zero, so a fall with lists reused for many steps is the same bit for
-bit as one whose lists are rebuilt at every step (each ``advance`` call rebuilds them at its first step).
+bounding sphere, where the contact's force is zero: the loads with the lists are those of a pass over all, and a
+fall with lists reused for many steps is the same bit for bit as one whose lists are rebuilt at every step (each
+``advance`` call rebuilds them at its first step).
 """
 
 from __future__ import annotations
@@ -13,7 +14,8 @@ import pytest
 from moor_env import load_scene, solve_statics
 from moor_env.physics import layout as L
 from moor_env.physics.anchor_surface import bounding_radius_m
-from moor_env.physics.contact_broadphase import SKIN_M
+from moor_env.physics.contact_broadphase import ROUNDING_M, SKIN_M, note_moved, prepare_near
+from moor_env.physics.loads import compute_loads
 
 
 def _released(scene: str, **overrides):
@@ -52,8 +54,8 @@ def _segment_distance_m(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> float:
 
 def test_lists_hold_everything_inside_the_sphere_between_rebuilds():
     """Reference: the bounding sphere (``anchor_surface.bounding_radius_m``) at the end of every 50-step call of the
-    vertical-chain fall, where the lists are up to 49 steps old: every free node and every segment reaching into it
-    is listed, and what the lists leave out lay beyond the sphere plus the skin when they were built."""
+    vertical-chain fall, where the lists are up to 50 steps old: while the skin is open, every free node and every
+    segment reaching into the sphere is listed."""
     sim = _released("vertical-chain")
     model, state = sim.records()
     radius = bounding_radius_m(model.contact_shape)
@@ -61,10 +63,10 @@ def test_lists_hold_everything_inside_the_sphere_between_rebuilds():
     for _ in range(250):
         sim.advance_to(sim.state.t + 50 * sim.dt)
         model, state = sim.records()
+        if not state.near_skin[L.NEAR_MOVED_M] < SKIN_M:
+            continue  # out of date: the next step rebuilds them
         centre = state.body_state[L.BS_POS:L.BS_POS + 3]
-        nodes = set(state.near_nodes[:np.argmax(np.append(state.near_nodes, -1) < 0)].tolist())
-        segs = set(state.near_segs[:np.argmax(np.append(state.near_segs, -1) < 0)].tolist())
-        assert 0.0 <= state.near_skin[L.NEAR_MOVED_M] < SKIN_M + 1.0
+        nodes, segs = _listed(state.near_nodes), _listed(state.near_segs)
         for n in np.flatnonzero(state.node_i[:, L.NI_KIND] == L.NODE_FREE):
             if np.linalg.norm(state.node_pos[n] - centre) <= radius:
                 assert n in nodes
@@ -74,3 +76,58 @@ def test_lists_hold_everything_inside_the_sphere_between_rebuilds():
             if _segment_distance_m(a, b, centre) <= radius:
                 assert s in segs
     assert checked > 100  # the chain did come near
+
+
+def _listed(near: np.ndarray) -> set[int]:
+    end = np.flatnonzero(near < 0)
+    return set(near[:end[0] if end.size else near.size].tolist())
+
+
+def test_listed_loads_equal_a_pass_over_all():
+    """Reference: the same load evaluation passing over every node and segment (``NEAR_ON`` 0); tolerance: none.
+    The vertical chain is thrown at the anchor at 40 m/s. At the end of every 400-step call, where the lists are
+    still in date, the contact's forces on the nodes and the anchor and its record are the same bit for bit with
+    the lists as without; in several of those calls the anchor's centre of gravity alone moved more than the skin,
+    so the lists were rebuilt within the call when the skin closed."""
+    sim = _released("vertical-chain")
+    free = sim.state.node_i[:, L.NI_KIND] == L.NODE_FREE
+    sim.state.node_vel[free, 2] -= 40.0
+    compared = rebuilt = 0
+    for _ in range(30):
+        cog = sim.state.body_state[L.BS_POS:L.BS_POS + 3].copy()
+        status, _ = sim.advance_to(sim.state.t + 400 * sim.dt, detect_touchdown=True)
+        model, state = sim.records()
+        if not state.near_skin[L.NEAR_MOVED_M] < SKIN_M:
+            continue
+        rebuilt += np.linalg.norm(state.body_state[L.BS_POS:L.BS_POS + 3] - cog) > SKIN_M
+        out = []
+        for on in (1.0, 0.0):
+            state.near_skin[L.NEAR_ON] = on
+            compute_loads(model, state)
+            out.append((state.node_force.copy(), state.body_load.copy(), state.contact_out.copy()))
+        for listed, everything in zip(out[0], out[1], strict=True):
+            assert np.array_equal(listed, everything)
+        compared += 1
+        if status == L.STATUS_TOUCHDOWN:
+            break
+    assert compared >= 5 and rebuilt >= 3
+    assert sim.contact_report()["peak_force_n"] > 0.0  # the chain did hit the anchor
+
+
+def test_lists_are_rebuilt_when_the_skin_closes():
+    """Reference: the rule of ``contact_broadphase.prepare_near``: the lists are kept while the nodes and the COG
+    can have closed less than ``SKIN_M - ROUNDING_M`` on each other, rebuilt from there on and at the first step of
+    a call; ``note_moved`` adds dt (fastest node + COG speed) and ends the lists' use."""
+    sim = _released("vertical-chain")
+    model, state = sim.records()
+    prepare_near(model, state, False)
+    assert state.near_skin[L.NEAR_ON] == 1.0 and state.near_skin[L.NEAR_MOVED_M] == 0.0
+    note_moved(state, 0.5, 9.0, 1.0)  # 0.5 s at 3 + 1 m/s
+    assert state.near_skin[L.NEAR_MOVED_M] == 2.0 and state.near_skin[L.NEAR_ON] == 0.0
+    for moved, same_topology, kept in ((SKIN_M - 0.5, True, True), (SKIN_M - ROUNDING_M, True, False),
+                                       (0.0, False, False)):
+        state.near_nodes[0] = 123456  # a mark a rebuild overwrites
+        state.near_skin[L.NEAR_MOVED_M] = moved
+        prepare_near(model, state, same_topology)
+        assert (state.near_nodes[0] == 123456) == kept
+        assert state.near_skin[L.NEAR_MOVED_M] == (moved if kept else 0.0)
