@@ -56,7 +56,8 @@ jit = functools.partial(numba.njit, cache=True, nogil=True, fastmath=FASTMATH_FL
 # ``integrate.advance`` end cleanly) instead of raising ZeroDivisionError out of the kernel. Without a zero test
 # before every division LLVM schedules the arithmetic freely: the time-stepping modules (integrate, implicit) are
 # ~30 % faster per implicit step (benchmarks/bench_implicit_step.py); results move by rounding only (1e-11 to
-# 1e-9 relative at touchdown).
+# 1e-9 relative at touchdown). The line-anchor contact's modules (anchor_surface, contact, segment_contact and
+# the broad phase), called per node or segment near the anchor at every step, use it too.
 jit_step = functools.partial(jit, error_model="numpy")
 
 # ``jit_step`` without numba's reference counting (NRT), for the kernels that take the records

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 
-from moor_env.physics._jit import jit
+from moor_env.physics._jit import jit_step
 from moor_env.physics.layout import (
     BS_AXIS,
     BS_POS,
@@ -38,7 +38,7 @@ FEATURE_FRONT = 1
 FEATURE_BACK = 2
 FEATURE_RIM = 3
 
-@jit
+@jit_step
 def from_cog(px, py, pz, body_state):
     """The point relative to the anchor's COG, r = x - r_G [m], and its axial coordinate a = r . e [m]."""
     rx = px - body_state[BS_POS]
@@ -47,14 +47,14 @@ def from_cog(px, py, pz, body_state):
     return rx, ry, rz, rx * body_state[BS_AXIS] + ry * body_state[BS_AXIS + 1] + rz * body_state[BS_AXIS + 2]
 
 
-@jit
+@jit_step
 def radial_part(px, py, pz, body_state):
     """A point's axial coordinate a [m] and its radial vector from the anchor's axis, q = r - a e [m]."""
     rx, ry, rz, a = from_cog(px, py, pz, body_state)
     return a, rx - a * body_state[BS_AXIS], ry - a * body_state[BS_AXIS + 1], rz - a * body_state[BS_AXIS + 2]
 
 
-@jit
+@jit_step
 def _anchor_frame(px, py, pz, body_state):
     """Axial coordinate a, radius rho, radial unit vector u and axis e of a point in the anchor's frame."""
     ex = body_state[BS_AXIS]
@@ -73,7 +73,7 @@ def _anchor_frame(px, py, pz, body_state):
     return a, 0.0, qx / norm, qy / norm, qz / norm, ex, ey, ez
 
 
-@jit
+@jit_step
 def _end_depth(gap, inner, rho):
     """Depth below an end face ``gap`` [m] inside it (annulus from radius ``inner`` out); inside the annulus'
     inner radius the nearest point of the face is its inner rim. Returns (depth, e-part, u-part of the normal
@@ -85,7 +85,7 @@ def _end_depth(gap, inner, rho):
     return depth, gap / depth, dr / depth
 
 
-@jit
+@jit_step
 def surface_distance(px, py, pz, body_state, shape):
     """Signed distance of a point to the anchor's surface and its derivatives.
 
@@ -175,7 +175,7 @@ def surface_distance(px, py, pz, body_state, shape):
             feature)
 
 
-@jit
+@jit_step
 def bounding_radius_m(shape):
     """Radius of the sphere about the anchor's COG that holds every section's cylinder (the whole surface) [m]."""
     r2 = 0.0
@@ -184,7 +184,7 @@ def bounding_radius_m(shape):
     return math.sqrt(r2)
 
 
-@jit
+@jit_step
 def within_reach(px, py, pz, body_state, shape, margin_m=0.0):
     """Whether a point lies inside the cylinder that bounds the anchor, grown by ``margin_m`` [m] on every side
     (cheap test before the contact law)."""
@@ -198,7 +198,7 @@ def within_reach(px, py, pz, body_state, shape, margin_m=0.0):
     return False
 
 
-@jit
+@jit_step
 def length_on_surface(node_pos, seg_i, seg_f, first_seg, n_segs, body_state, shape, tolerance_m):
     """Unstretched length of the segments ``first_seg`` .. ``first_seg + n_segs - 1`` with both ends within
     ``tolerance_m`` of the anchor's surface or inside it [m] (a line resting on the anchor)."""
@@ -218,13 +218,13 @@ GOLDEN_STEPS = 24  # golden-section steps that refine it (the bracket shrinks to
 INSIDE_TOLERANCE_M = 1e-9  # deeper than this counts as inside (a line's end on the surface rounds either way)
 
 
-@jit
+@jit_step
 def _depth_along(ax, ay, az, bx, by, bz, t, body_state, shape):
     """Depth [m] of the point a + t (b - a) inside the anchor's surface (negative: outside)."""
     return -surface_distance(ax + t * (bx - ax), ay + t * (by - ay), az + t * (bz - az), body_state, shape)[0]
 
 
-@jit
+@jit_step
 def segment_depth(ax, ay, az, bx, by, bz, body_state, shape):
     """The deepest point of the straight segment from a to b inside the anchor's surface: (depth [m], t), the point
     at a + t (b - a); the depth is negative where the whole segment stays outside.
@@ -278,7 +278,7 @@ def segment_depth(ax, ay, az, bx, by, bz, body_state, shape):
     return _kink_candidates(ax, ay, az, bx, by, bz, body_state, shape, best, best_t)
 
 
-@jit
+@jit_step
 def _try(ax, ay, az, bx, by, bz, t, body_state, shape, best, best_t):
     """The deeper of (best, best_t) and the point at t, where t lies on the segment."""
     if 0.0 <= t <= 1.0:
@@ -288,7 +288,7 @@ def _try(ax, ay, az, bx, by, bz, t, body_state, shape, best, best_t):
     return best, best_t
 
 
-@jit
+@jit_step
 def _kink_candidates(ax, ay, az, bx, by, bz, body_state, shape, best, best_t):
     """:func:`segment_depth`'s closed-form candidates, per section: the segment's closest approach to the axis
     (where the shaft's depth peaks) and the points where the shaft's depth R - rho(t) equals an end face's, with
@@ -328,7 +328,7 @@ def _kink_candidates(ax, ay, az, bx, by, bz, body_state, shape, best, best_t):
     return best, best_t
 
 
-@jit
+@jit_step
 def deepest_segment_point(node_pos, seg_i, body_state, shape):
     """How deep the deepest point of any active segment, its interior included, lies inside the anchor's surface
     [m] (0 where none lies more than ``INSIDE_TOLERANCE_M`` inside), and that segment's index (-1 where none)."""

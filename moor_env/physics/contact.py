@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import math
 
-from moor_env.physics._jit import jit
+from moor_env.physics._jit import jit_step
 from moor_env.physics.anchor_surface import bounding_radius_m, from_cog, surface_distance, within_reach
 from moor_env.physics.contact_broadphase import listed
 from moor_env.physics.layout import (
@@ -65,7 +65,7 @@ from moor_env.physics.layout import (
 )
 
 
-@jit
+@jit_step
 def may_touch(node_pos, node_i, n, body_state, shape, seabed_z, margin_m=0.0):
     """Whether node n is one the contact acts on and lies within ``margin_m`` [m] of the anchor's bounding
     cylinder: a free node above the seabed (``seabed_z`` [m]; below it the anchor is in the soil, which strips a
@@ -76,7 +76,7 @@ def may_touch(node_pos, node_i, n, body_state, shape, seabed_z, margin_m=0.0):
 
 
 # features of the surface nearest to a point
-@jit
+@jit_step
 def relative_velocity(px, py, pz, vx, vy, vz, body_state):
     """Velocity of a point at p moving at v relative to the anchor's material point there,
     w = v - v_G - omega x (p - r_G) [m/s]."""
@@ -88,7 +88,7 @@ def relative_velocity(px, py, pz, vx, vy, vz, body_state):
             vz - body_state[BS_VEL + 2] - (ox * ry - oy * rx))
 
 
-@jit
+@jit_step
 def _law(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f):
     """The law of :func:`node_contact`: (depth, force, and what its Jacobian needs); depth 0 outside."""
     sd = 1.0
@@ -103,7 +103,7 @@ def _law(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f):
             st, normal, g, sliding, viscous_from_n)
 
 
-@jit
+@jit_step
 def law_at(depth, nx, ny, nz, wx, wy, wz, mass_kg, contact_f):
     """The contact law at a point ``depth`` [m] inside the surface (0: outside) with outward normal n and velocity
     w relative to the body's point there [m/s], for a mass ``mass_kg`` [kg] (module docstring): the force
@@ -135,7 +135,7 @@ def law_at(depth, nx, ny, nz, wx, wy, wz, mass_kg, contact_f):
             sliding, viscous_from_n)
 
 
-@jit
+@jit_step
 def contact_force(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f):
     """Contact force on a node of mass ``mass_kg`` at (p, v) from the anchor (module docstring).
 
@@ -151,7 +151,7 @@ def contact_force(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f)
     return force_within_reach(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f)
 
 
-@jit
+@jit_step
 def force_within_reach(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f):
     """:func:`contact_force` of a node already found within the anchor's bounding cylinder
     (``anchor_surface.within_reach``): nothing but the surface distance computed for a node outside the surface."""
@@ -163,7 +163,7 @@ def force_within_reach(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, conta
     return -sd, fx, fy, fz
 
 
-@jit
+@jit_step
 def node_contact(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f, jac):
     """:func:`contact_force` and its Jacobians: ``jac`` (shape (2, 3, 3)) receives dF/dx [N/m] and dF/dv [N s/m]
     (zeros out of contact)."""
@@ -180,7 +180,7 @@ def node_contact(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f, 
     return depth, fx, fy, fz
 
 
-@jit
+@jit_step
 def _contact_jacobian(jac, nx, ny, nz, hxx, hyy, hzz, hxy, hxz, hyz, ox, oy, oz, wx, wy, wz, wn, fn, k, c, mu,
                       stick, tx, ty, tz, st, normal, g, sliding, viscous_from_n):
     """dF/dx and dF/dv of :func:`node_contact` into ``jac`` (body state fixed)."""
@@ -237,14 +237,14 @@ def _contact_jacobian(jac, nx, ny, nz, hxx, hyy, hzz, hxy, hxz, hyz, ox, oy, oz,
             jac[1, i, j] = av
 
 
-@jit
+@jit_step
 def _reaction_moment(body_state, px, py, pz, fx, fy, fz):
     """Moment about the COG of the reaction -F at the node: (x - r_G) x (-F)."""
     rx, ry, rz, _ = from_cog(px, py, pz, body_state)
     return rz * fy - ry * fz, rx * fz - rz * fx, ry * fx - rx * fy
 
 
-@jit
+@jit_step
 def add_contact_reaction(load, body_state, px, py, pz, fx, fy, fz):
     """Add the reaction of a contact force (fx, fy, fz) on a node at p to the body's ``load`` (F [N], M about
     the COG [N m]): -F at the node."""
@@ -257,7 +257,7 @@ def add_contact_reaction(load, body_state, px, py, pz, fx, fy, fz):
     load[5] += mz
 
 
-@jit
+@jit_step
 def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_state, shape, contact_f, contact_out,
                       seabed_z, near_nodes, listed_on):
     """Add the contact force of every free node inside the anchor to ``node_force`` and record the nodes inside in
@@ -311,7 +311,7 @@ def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_st
     return lx, ly, lz, mx, my, mz
 
 
-@jit
+@jit_step
 def record_contact_force(contact_out, fx, fy, fz):
     """Record the net contact force on the anchor (F [N]) and its running peak in ``contact_out``."""
     force = math.sqrt(fx * fx + fy * fy + fz * fz)

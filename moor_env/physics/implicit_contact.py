@@ -63,7 +63,7 @@ def contact_state(px, py, pz, vx, vy, vz, body_state, shape):
     return -sd, nx, ny, nz, wx, wy, wz
 
 
-@jit_step
+@jit_step(inline="always")
 def start_state(model, state, k, n):
     """:func:`contact_state` of candidate k (node n) at the start of the step and its contact force there [N]
     (the load law's, ``contact.law_at``; zero outside), computed at its first use in the step and kept in

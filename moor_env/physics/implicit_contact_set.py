@@ -5,7 +5,8 @@ linearised law (``physics/implicit_contact.py``) during the step.
   solve, a node outside predicted inside at the end of the step enters with the unclipped linear law
   k d - c (w . n) (d < 0: the gap), so that the solve sees where it lands, and a node inside predicted outside
   leaves (its start-of-step force removed); each node changes at most once per step (as the segments,
-  ``implicit_active_set``).
+  ``implicit_active_set``). A node predicted to land that the contact's damping pushes back out within the step
+  stays in the set (:func:`_caught`): solved without it, it would end inside and come back to the same law.
 - Broad phase: once per step, one distance per node to the anchor's COG keeps the candidates, the nodes that can
   reach the anchor within the step; the solves test only them. Storage: ``state.contact_set`` holds the
   candidates in node order, each as node << ``SET_BITS`` | its ``SET_*`` state, the list ended by -1 where it
@@ -19,8 +20,9 @@ from __future__ import annotations
 import math
 
 from moor_env.physics._jit import jit_no_refcount
-from moor_env.physics.anchor_surface import bounding_radius_m, surface_distance, within_reach
+from moor_env.physics.anchor_surface import bounding_radius_m, within_reach
 from moor_env.physics.contact import relative_velocity
+from moor_env.physics.contact_broadphase import covers_step, listed
 from moor_env.physics.implicit_contact import (
     SET_BITS,
     SET_COMING,
@@ -38,6 +40,8 @@ from moor_env.physics.layout import (
     BS_POS,
     CC_READY,
     CF_SEGMENTS,
+    CF_STIFFNESS,
+    CF_ZETA,
     EF_DEPTH,
     EF_SPEED_LIMIT,
     NI_KIND,
@@ -93,9 +97,11 @@ def init_contact_set(h, model, state):
         r2 = dx * dx + dy * dy + dz * dz
         if r2 > far2 or node_i[n, NI_KIND] != NODE_FREE or p[n, 2] < seabed_z:
             continue
+        # the start-of-step state, where computed here, is cached for the step (``start_state``)
+        state.contact_cache[k, CC_READY] = 0.0
         mode = SET_OUT
         if r2 <= body2 and within_reach(p[n, 0], p[n, 1], p[n, 2], body_state, model.contact_shape):
-            if surface_distance(p[n, 0], p[n, 1], p[n, 2], body_state, model.contact_shape)[0] < 0.0:
+            if start_state(model, state, k, n)[0] > 0.0:
                 mode = SET_IN
         if mode == SET_OUT:
             wx, wy, wz = relative_velocity(p[n, 0], p[n, 1], p[n, 2], v[n, 0], v[n, 1], v[n, 2], body_state)
@@ -107,14 +113,12 @@ def init_contact_set(h, model, state):
             dz = inv_m * state.node_force[n, 2]
             reach = h * math.sqrt((wx + dx) ** 2 + (wy + dy) ** 2 + (wz + dz) ** 2)
             if within_reach(p[n, 0], p[n, 1], p[n, 2], body_state, model.contact_shape, reach):
-                sd, nx, ny, nz, _, _, _, _, _, _, _ = surface_distance(p[n, 0], p[n, 1], p[n, 2], body_state,
-                                                                       model.contact_shape)
-                if sd > RESTING_GAP_M:  # not resting: its present velocity alone
+                depth, nx, ny, nz = start_state(model, state, k, n)[:4]
+                if -depth > RESTING_GAP_M:  # not resting: its present velocity alone
                     dx = dy = dz = 0.0
-                if predicted_depth(h, -sd, nx, ny, nz, wx, wy, wz, dx, dy, dz) > DEPTH_TOLERANCE_M:
+                if predicted_depth(h, depth, nx, ny, nz, wx, wy, wz, dx, dy, dz) > DEPTH_TOLERANCE_M:
                     mode = SET_COMING
         contact_set[k] = (n << SET_BITS) | mode
-        state.contact_cache[k, CC_READY] = 0.0
         k += 1
     if k < contact_set.shape[0]:
         contact_set[k] = -1
@@ -126,10 +130,12 @@ def init_segment_set(h, model, state):
     """Start of a step: the segments in contact during it, each with its law (``implicit_contact.segment_mode``),
     into ``state.segment_set`` (segment << ``SET_BITS`` | its state, ended by -1 where shorter than the segments);
     the step's passes over the segment contacts (``implicit_contact._segment_pass``) visit only these. Broad
-    phase: the anchor's bounding sphere grown by the farthest a segment and the anchor close in within an accepted
-    step (2 h v_limit, ``segment_contact.near_sphere``), then ``segment_contact.may_cut`` grown by the farthest this
-    segment's nodes move against the anchor's points at their present velocities (h max |w|: the deepest point
-    moves at the nodes' relative velocities interpolated, no faster)."""
+    phase: the segments listed near the anchor where the list holds all that can reach it in the step
+    (``contact_broadphase.covers_step``), else all; of them, those within the anchor's bounding sphere grown by the
+    farthest a segment and the anchor close in within an accepted step (2 h v_limit,
+    ``segment_contact.near_sphere``), then ``segment_contact.may_cut`` grown by the farthest this segment's nodes
+    move against the anchor's points at their present velocities (h max |w|: the deepest point moves at the nodes'
+    relative velocities interpolated, no faster)."""
     segment_set = state.segment_set
     seg_i = state.seg_i
     p = state.node_pos
@@ -139,8 +145,13 @@ def init_segment_set(h, model, state):
     seabed_z = -model.env_f[EF_DEPTH]
     radius = bounding_radius_m(shape)
     far = 2.0 * h * model.env_f[EF_SPEED_LIMIT]
+    listed_on = covers_step(model, state, h)
+    near = state.near_segs
     k = 0
-    for s in range(seg_i.shape[0] if model.contact_f[CF_SEGMENTS] != 0.0 else 0):
+    for j in range(seg_i.shape[0] if model.contact_f[CF_SEGMENTS] != 0.0 else 0):
+        s = listed(near, listed_on, j)
+        if s < 0:
+            break
         if not near_sphere(p, seg_i, s, body_state, radius + far):
             continue
         a = seg_i[s, SI_A]
@@ -160,6 +171,21 @@ def init_segment_set(h, model, state):
         k += 1
     if k < segment_set.shape[0]:
         segment_set[k] = -1
+
+
+@jit_no_refcount
+def _caught(h, model, state, n, end, nx, ny, nz, wx, wy, wz):
+    """Whether a coming node that the solve ends ``end`` [m] outside the anchor (negative) was stopped by the
+    contact: its law's normal force at the end of the step, k d - c (w + dv) . n, pushes it out, and without that
+    push (h^2 F / m deeper, its own inertia alone) it would end inside. Such a node stays in the set: solved
+    without the contact it would end inside and enter with the same law again (each node changes once per step),
+    so the step would end with the first solve's answer after two more solves."""
+    dv = state.node_acc
+    k = model.contact_f[CF_STIFFNESS]
+    mass = state.node_mass[n]
+    c = 2.0 * model.contact_f[CF_ZETA] * math.sqrt(k * mass)
+    normal = k * end - c * ((wx + dv[n, 0]) * nx + (wy + dv[n, 1]) * ny + (wz + dv[n, 2]) * nz)
+    return normal > 0.0 and end + h * h * normal / max(mass, 1e-12) > DEPTH_TOLERANCE_M
 
 
 @jit_no_refcount
@@ -189,7 +215,8 @@ def update_contact_set(h, model, state):
             mode = SET_ENTERED
         elif mode == SET_IN and end < -DEPTH_TOLERANCE_M:
             mode = SET_LEFT
-        elif mode == SET_COMING and end < -DEPTH_TOLERANCE_M:
+        elif mode == SET_COMING and end < -DEPTH_TOLERANCE_M and not _caught(h, model, state, n, end, nx, ny, nz, wx,
+                                                                            wy, wz):
             mode = SET_MISSED
         else:
             continue

@@ -124,7 +124,7 @@ def step(model, state, t, dt, integrator, same_topology):
     body_active = model.body_f[BF_ACTIVE] != 0.0
     near = body_active and model.contact_f[CF_ON] != 0.0 and integrator != INTEGRATOR_RK2
     if near:
-        prepare_near(model, state, same_topology)
+        prepare_near(model, state, same_topology, dt)
     if integrator == INTEGRATOR_IMPLICIT_EULER:
         args_strain = compute_loads(model, state)
     else:

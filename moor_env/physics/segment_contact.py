@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import math
 
-from moor_env.physics._jit import jit
+from moor_env.physics._jit import jit_step
 from moor_env.physics.anchor_surface import (
     FEATURE_SHAFT,
     bounding_radius_m,
@@ -71,7 +71,7 @@ from moor_env.physics.layout import (
 KINK_PROBE_M = 1e-6  # how far to either side of the deepest point the normals are compared for a kink [m]
 
 
-@jit(inline="always")  # called once per segment per load evaluation: inlined, its array arguments stay in place
+@jit_step(inline="always")  # called once per segment per load evaluation: inlined, its array arguments stay in place
 def near_sphere(node_pos, seg_i, s, body_state, reach_m):
     """Whether active segment s may reach into the sphere of radius ``reach_m`` [m] about the anchor's COG: its
     midpoint within half its length of it, tested as |m - r_G|^2 <= 2 (R^2 + (l / 2)^2) (>= (R + l / 2)^2: no
@@ -89,7 +89,7 @@ def near_sphere(node_pos, seg_i, s, body_state, reach_m):
     return gx * gx + gy * gy + gz * gz <= 2.0 * (reach_m * reach_m + 0.25 * (dx * dx + dy * dy + dz * dz))
 
 
-@jit(inline="always")  # called once per segment per load evaluation: inlined, its array arguments stay in place
+@jit_step(inline="always")  # called once per segment per load evaluation: inlined, its array arguments stay in place
 def may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, body_radius_m, margin_m):
     """Whether active segment s can cut into the anchor (cheap tests before :func:`segment_geometry`): its
     midpoint within half its length of the sphere that holds the anchor (``body_radius_m`` [m] about its COG,
@@ -134,7 +134,7 @@ def may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, body_radius
     return not _on_the_back_face(aa, qax, qay, qaz, ab, qbx, qby, qbz, shape)
 
 
-@jit
+@jit_step
 def _on_the_back_face(aa, qax, qay, qaz, ab, qbx, qby, qbz, shape):
     """Whether a segment of a one-cylinder anchor has both nodes (axial coordinates aa, ab; radial vectors q)
     where the back face is the nearest surface: within the radius and nearer the back face than the shaft and the
@@ -153,7 +153,7 @@ def _on_the_back_face(aa, qax, qay, qaz, ab, qbx, qby, qbz, shape):
     return True
 
 
-@jit
+@jit_step
 def segment_geometry(ax, ay, az, bx, by, bz, body_state, shape):
     """The segment contact's geometry (module docstring) of the segment from a to b: the excess e [m] along the
     contact's normal (negative: the gap the segment must close before it cuts in deeper than its nodes), t (p* =
@@ -173,13 +173,13 @@ def segment_geometry(ax, ay, az, bx, by, bz, body_state, shape):
             uax, uay, uaz, ubx, uby, ubz)
 
 
-@jit
+@jit_step
 def _normal_along(ax, ay, az, bx, by, bz, t, body_state, shape):
     """The surface normal (the signed distance's gradient) at the point a + t (b - a)."""
     return surface_distance(ax + t * (bx - ax), ay + t * (by - ay), az + t * (bz - az), body_state, shape)[1:4]
 
 
-@jit
+@jit_step
 def contact_frame(ax, ay, az, bx, by, bz, t, body_state, shape):
     """g, the gradient of the segment's depth at its deepest point p* (t) with respect to a move of the segment
     across itself (|g| <= 1), and how p* moves along the segment as either node moves, dt/dx_a and dt/dx_b [1/m]
@@ -230,7 +230,7 @@ def contact_frame(ax, ay, az, bx, by, bz, t, body_state, shape):
     return (gx / size, gy / size, gz / size) + _closest_approach_motion(ax, ay, az, bx, by, bz, t, body_state)
 
 
-@jit
+@jit_step
 def _closest_approach_motion(ax, ay, az, bx, by, bz, t, body_state):
     """dt/dx_a and dt/dx_b of the segment's closest approach to the anchor's axis, t = -(q0 . q1) / |q1|^2:
     dt/dx_a = -((1 - 2 t) q1 - q0) / |q1|^2, dt/dx_b = -(q0 + 2 t q1) / |q1|^2."""
@@ -247,7 +247,7 @@ def _closest_approach_motion(ax, ay, az, bx, by, bz, t, body_state):
             -(q0z + 2.0 * t * q1z) / q11)
 
 
-@jit
+@jit_step
 def free_shares(node_i, a, b, t):
     """The shares (1 - t, t) of the segment's force that its nodes a and b take: zero for a node that is not free
     (held by a vessel, its share leaves the model with it; welded, or the anchor's own, left out by
@@ -257,7 +257,7 @@ def free_shares(node_i, a, b, t):
     return wa, wb
 
 
-@jit
+@jit_step
 def point_velocity(node_vel, a, b, t, px, py, pz, body_state):
     """Velocity of p* (the nodes' velocities interpolated at t) relative to the anchor's point there [m/s]."""
     return relative_velocity(px, py, pz, (1.0 - t) * node_vel[a, 0] + t * node_vel[b, 0],
@@ -265,7 +265,7 @@ def point_velocity(node_vel, a, b, t, px, py, pz, body_state):
                              (1.0 - t) * node_vel[a, 2] + t * node_vel[b, 2], body_state)
 
 
-@jit
+@jit_step
 def point_mass(node_mass, wa, wb, a, b):
     """The mass the law's damping takes at p* [kg]: the inertia p* has where the force is shared (wa, wb) between
     its free nodes, 1 / (wa^2 / m_a + wb^2 / m_b) (a node that is not free, zero share, counts as held). Why: with
@@ -279,7 +279,7 @@ def point_mass(node_mass, wa, wb, a, b):
     return 1.0 / inverse
 
 
-@jit
+@jit_step
 def segment_contact(node_pos, node_vel, node_i, node_mass, a, b, body_state, shape, contact_f):
     """The contact of the segment from node a to node b: (excess e [m], force at p* [N] (3), p* [m] (3), normal
     (3), relative velocity of p* [m/s] (3), its mass [kg], t, the free nodes' shares wa, wb, whether a node lies
@@ -299,7 +299,7 @@ def segment_contact(node_pos, node_vel, node_i, node_mass, a, b, body_state, sha
     return e, fx, fy, fz, px, py, pz, nx, ny, nz, wx, wy, wz, mass, t, wa, wb, node_inside
 
 
-@jit
+@jit_step
 def add_segment_contact_loads(node_pos, node_vel, node_i, node_mass, seg_i, node_force, body_state, shape,
                               contact_f, seabed_z, contact_out, near_segs, listed_on):
     """Add every segment contact's force (module docstring) to its nodes' ``node_force`` (shares 1 - t and t, to

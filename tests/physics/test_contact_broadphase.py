@@ -14,7 +14,7 @@ import pytest
 from moor_env import load_scene, solve_statics
 from moor_env.physics import layout as L
 from moor_env.physics.anchor_surface import bounding_radius_m
-from moor_env.physics.contact_broadphase import ROUNDING_M, SKIN_M, note_moved, prepare_near
+from moor_env.physics.contact_broadphase import ROUNDING_M, SKIN_M, covers_step, note_moved, prepare_near
 from moor_env.physics.loads import compute_loads
 
 
@@ -36,6 +36,7 @@ def _fall(sim, steps_per_call: int, n_steps: int) -> np.ndarray:
 
 @pytest.mark.parametrize("scene, overrides, n_steps", [
     ("vertical-chain", {}, 9000),  # the chain lands on the back end
+    ("vertical-chain", {"integrator": "implicit_euler"}, 400),  # the segment pass uses the list too
     ("gjoa-500", {"integrator": "implicit_euler"}, 300),
     ("gjoa-500", {"vessel_spacing_m": 0.0}, 4000),  # the loop rests on the anchor from the start
 ])
@@ -116,18 +117,28 @@ def test_listed_loads_equal_a_pass_over_all():
 
 def test_lists_are_rebuilt_when_the_skin_closes():
     """Reference: the rule of ``contact_broadphase.prepare_near``: the lists are kept while the nodes and the COG
-    can have closed less than ``SKIN_M - ROUNDING_M`` on each other, rebuilt from there on and at the first step of
-    a call; ``note_moved`` adds dt (fastest node + COG speed) and ends the lists' use."""
+    can have closed less than ``SKIN_M - ROUNDING_M`` on each other by the end of the coming step (at the speeds
+    the last step ended with, the anchor not turning), rebuilt from there on and at the first step of a call;
+    ``note_moved`` adds dt (fastest node + COG speed), keeps that speed and ends the lists' use. The implicit
+    step's segment pass uses the list only while the step's reach fits in the skin and the speeds are known."""
     sim = _released("vertical-chain")
     model, state = sim.records()
-    prepare_near(model, state, False)
+    prepare_near(model, state, False, 0.1)
     assert state.near_skin[L.NEAR_ON] == 1.0 and state.near_skin[L.NEAR_MOVED_M] == 0.0
+    assert not covers_step(model, state, 1e-6)  # no speed known at the first step of a call
     note_moved(state, 0.5, 9.0, 1.0)  # 0.5 s at 3 + 1 m/s
     assert state.near_skin[L.NEAR_MOVED_M] == 2.0 and state.near_skin[L.NEAR_ON] == 0.0
-    for moved, same_topology, kept in ((SKIN_M - 0.5, True, True), (SKIN_M - ROUNDING_M, True, False),
-                                       (0.0, False, False)):
+    assert state.near_skin[L.NEAR_SPEED_M_S] == 4.0
+    # steps of 0.1 s at 4 m/s close 0.4 m
+    for moved, same_topology, kept in ((SKIN_M - 0.5, True, True), (SKIN_M - 0.3, True, False),
+                                       (SKIN_M - ROUNDING_M, True, False), (0.0, False, False)):
+        state.near_skin[L.NEAR_SPEED_M_S] = 4.0
         state.near_nodes[0] = 123456  # a mark a rebuild overwrites
         state.near_skin[L.NEAR_MOVED_M] = moved
-        prepare_near(model, state, same_topology)
+        prepare_near(model, state, same_topology, 0.1)
         assert (state.near_nodes[0] == 123456) == kept
         assert state.near_skin[L.NEAR_MOVED_M] == (moved if kept else 0.0)
+        assert covers_step(model, state, 0.1) == same_topology
+    state.near_skin[L.NEAR_SPEED_M_S] = 4.0
+    state.near_skin[L.NEAR_MOVED_M] = 1.5
+    assert covers_step(model, state, 0.1) and not covers_step(model, state, 0.2)
