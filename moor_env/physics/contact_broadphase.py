@@ -19,11 +19,12 @@ step only, so that the statics and a load evaluation from Python pass over all. 
 rebuilt at the first step of every ``integrate.advance`` call and after a payout changed the segments.
 
 The implicit step's segment contacts (``implicit_contact_set.init_segment_set``) visit the listed segments too
-where the list holds every segment that can reach the anchor within the step (:func:`covers_step`). A segment
-reaches it only if its nearest point comes within h |w| of the sphere (w: its points' velocities relative to the
-anchor, bounded by the speeds the last step ended with, ``NEAR_SPEED_M_S``; one that cannot is given no law in
-the step, ``implicit_contact.segment_mode``); where that reach fits in what is left of the skin, every such
-segment is listed, and the step's segment set is that of a pass over all. The speeds are known from the second
+where the list holds every segment that the step's prediction can bring to the anchor (:func:`covers_step`). That
+prediction (``implicit_contact.segment_mode``) moves a segment by h w (w: its points' velocities relative to the
+anchor at the start of the step, at most the speeds the last step ended with, ``NEAR_SPEED_M_S``, plus the
+anchor's rotation times the distance); a segment whose nearest point lies farther than h |w| outside the sphere
+gets no law in the step. Where that reach fits in what is left of the skin, every other segment is listed, and
+the step's segment set is that of a pass over all. The speeds are known from the second
 step of an ``advance`` call on; the lists are rebuilt a step early where the next step's reach would not fit.
 
 The skin: 2 m is about 100 explicit steps of a fall at 25 m/s (0.34 ms steps) and two implicit steps (11 ms),
@@ -100,10 +101,10 @@ def step_reach_m(model, state, h):
 
 @jit_no_refcount
 def covers_step(model, state, h):
-    """Whether the segment list holds every segment that can reach the anchor's bounding sphere within a step of
-    ``h`` [s] (``implicit_contact_set.init_segment_set``): the lists are in use and the step's reach fits in what
-    is left of the skin. Any segment left out then lies farther from the sphere than it can move against the
-    anchor within the step."""
+    """Whether the segment list holds every segment that the prediction of a step of ``h`` [s] can bring to the
+    anchor's bounding sphere (``implicit_contact_set.init_segment_set``): the lists are in use and the step's reach
+    at the present velocities fits in what is left of the skin. Any segment left out then lies farther from the
+    sphere than its predicted move against the anchor, and gets no law in the step."""
     skin = state.near_skin
     return skin[NEAR_ON] != 0.0 and step_reach_m(model, state, h) < SKIN_M - ROUNDING_M - skin[NEAR_MOVED_M]
 
