@@ -33,6 +33,7 @@ from moor_env.physics.implicit_contact import (
     SET_MISSED,
     SET_OUT,
     candidate,
+    contact_force_change,
     predicted_depth,
     segment_mode,
     start_state,
@@ -41,8 +42,6 @@ from moor_env.physics.layout import (
     BS_POS,
     CC_READY,
     CF_SEGMENTS,
-    CF_STIFFNESS,
-    CF_ZETA,
     EF_DEPTH,
     EF_SPEED_LIMIT,
     NI_KIND,
@@ -175,9 +174,10 @@ def init_segment_set(h, model, state):
 
 
 @jit_no_refcount
-def _caught(h, model, state, n, end, nx, ny, nz, wx, wy, wz):
-    """Whether a coming node that the solve ends ``end`` [m] outside the anchor (negative) was stopped by the
-    contact: its law's normal force at the end of the step, k d - c (w + dv) . n, pushes it out, and without that
+def _caught(h, model, state, n, depth, end, nx, ny, nz, wx, wy, wz):
+    """Whether a coming node (start depth ``depth`` [m]) that the solve ends ``end`` [m] outside the anchor
+    (negative) was stopped by the contact: the force its law applied in the step
+    (``implicit_contact.contact_force_change``: k d - c (w + dv) . n at the end) pushes it out, and without that
     push it would end inside, estimated as h^2 F / m deeper (its structural mass alone: no added mass, no pull of
     its line). Such a node keeps its law. Why: solved without it, such a node mostly ends inside, enters with the
     same law again and the step ends near the first solve's answer after two more solves; on the vertical chain's
@@ -185,10 +185,10 @@ def _caught(h, model, state, n, end, nx, ny, nz, wx, wy, wz):
     result where it is wrong: on gjoa-500's implicit fall, once in 201 cases (a node kept with its law 0.15 mm off
     the anchor that, solved without it, ends 0.71 mm off with no contact force)."""
     dv = state.node_acc
-    k = model.contact_f[CF_STIFFNESS]
     mass = state.node_mass[n]
-    c = 2.0 * model.contact_f[CF_ZETA] * math.sqrt(k * mass)
-    normal = k * end - c * ((wx + dv[n, 0]) * nx + (wy + dv[n, 1]) * ny + (wz + dv[n, 2]) * nz)
+    fx, fy, fz = contact_force_change(h, SET_ENTERED, depth, nx, ny, nz, wx, wy, wz, mass, model.contact_f,
+                                      dv[n, 0], dv[n, 1], dv[n, 2], 0.0, 0.0, 0.0)
+    normal = fx * nx + fy * ny + fz * nz
     return normal > 0.0 and end + h * h * normal / max(mass, 1e-12) > DEPTH_TOLERANCE_M
 
 
@@ -219,8 +219,8 @@ def update_contact_set(h, model, state):
             mode = SET_ENTERED
         elif mode == SET_IN and end < -DEPTH_TOLERANCE_M:
             mode = SET_LEFT
-        elif mode == SET_COMING and end < -DEPTH_TOLERANCE_M and not _caught(h, model, state, n, end, nx, ny, nz, wx,
-                                                                            wy, wz):
+        elif mode == SET_COMING and end < -DEPTH_TOLERANCE_M and not _caught(h, model, state, n, depth, end, nx, ny,
+                                                                            nz, wx, wy, wz):
             mode = SET_MISSED
         else:
             continue
