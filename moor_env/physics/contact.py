@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import math
 
-from moor_env.physics._jit import jit_step
+from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.anchor_surface import bounding_radius_m, from_cog, surface_distance, within_reach
 from moor_env.physics.contact_broadphase import listed
 from moor_env.physics.layout import (
@@ -257,7 +257,7 @@ def add_contact_reaction(load, body_state, px, py, pz, fx, fy, fz):
     load[5] += mz
 
 
-@jit_step
+@jit_no_refcount
 def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_state, shape, contact_f, contact_out,
                       seabed_z, near_nodes, listed_on):
     """Add the contact force of every free node inside the anchor to ``node_force`` and record the nodes inside in
@@ -311,7 +311,7 @@ def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_st
     return lx, ly, lz, mx, my, mz
 
 
-@jit_step
+@jit_no_refcount
 def record_contact_force(contact_out, fx, fy, fz):
     """Record the net contact force on the anchor (F [N]) and its running peak in ``contact_out``."""
     force = math.sqrt(fx * fx + fy * fy + fz * fz)

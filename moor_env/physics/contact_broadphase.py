@@ -4,14 +4,17 @@ reused while nothing else can have come near (a neighbour list with a skin, as i
 Why: in a fall most of a line lies tens to hundreds of metres from the anchor, and testing every node and every
 segment against the anchor's bounding sphere at every step costs several per cent of an explicit step. The list
 holds the free nodes within R + ``SKIN_M`` of the anchor's COG and the segments whose nearest point lies within it
-(R: ``anchor_surface.bounding_radius_m``, the sphere about the COG that holds the anchor whatever its
-orientation), and every segment with a node that is not free (a vessel's or the anchor's node moves with its
-holder, not at the free nodes' speeds). The contact's load passes (``contact.add_contact_loads``,
+(R: ``anchor_surface.bounding_radius_m``, the sphere about the COG that holds the anchor whatever its orientation),
+and every segment with a node that is not free (a vessel's or the anchor's node moves with its holder, not at the
+free nodes' speeds). The contact's load passes (``contact.add_contact_loads``,
 ``segment_contact.add_segment_contact_loads``) visit only the listed ones while the nodes and the COG cannot have
-closed the skin: the sum over the steps since the list was built of dt (fastest free node + COG speed), each taken
-after the step (the explicit and implicit Euler steps move every point by dt times its new velocity), stays below
-``SKIN_M``. Every node or segment left out then lies outside the sphere, where the contact's force is zero, so
-the forces, their order of summation and every result are bit for bit those of a pass over all.
+closed the skin: the sum over the steps since the list was built of dt times a bound on the free nodes' speeds
+relative to the COG, each taken after the step (the explicit and implicit Euler steps move every point by dt times
+its new velocity), stays below ``SKIN_M``. The implicit step gives the fastest node's relative speed itself, from
+the loop that updates the nodes; the explicit step gives the fastest node's speed plus the COG's (its lists last
+about a hundred steps, and a pass for the relative speeds would cost more than the rebuilds it saves). Every node or
+segment left out then lies outside the sphere, where the contact's force is zero, so the forces, their order of
+summation and every result are bit for bit those of a pass over all.
 
 Only ``integrate.step`` uses the list, within its own step (symplectic and implicit Euler; the midpoint step
 moves its points at its midpoint velocities, which it does not bound): ``near_skin[NEAR_ON]`` is set for that
@@ -21,7 +24,7 @@ rebuilt at the first step of every ``integrate.advance`` call and after a payout
 The implicit step's segment contacts (``implicit_contact_set.init_segment_set``) visit the listed segments too
 where the list holds every segment that the step's prediction can bring to the anchor (:func:`covers_step`). That
 prediction (``implicit_contact.segment_mode``) moves a segment by h w (w: its points' velocities relative to the
-anchor at the start of the step, at most the speeds the last step ended with, ``NEAR_SPEED_M_S``, plus the
+anchor at the start of the step, at most the bound the last step ended with, ``NEAR_SPEED_M_S``, plus the
 anchor's rotation times the distance); a segment whose nearest point lies farther than h |w| outside the sphere
 gets no law in the step. Where that reach fits in what is left of the skin, every other segment is listed, and
 the step's segment set is that of a pass over all. The speeds are known from the second
@@ -70,14 +73,14 @@ def prepare_near(model, state, same_topology, dt):
 
 
 @jit_no_refcount
-def note_moved(state, dt, vmax2, body_v2):
-    """After a step of ``dt`` [s] whose fastest free node moved at sqrt(``vmax2``) and the COG at sqrt(``body_v2``)
-    [m/s] (their new velocities): add how far they can have closed on each other, keep their speeds for the next
-    step, and end the lists' use by anything but the next step."""
+def note_moved(state, dt, closing_m_s):
+    """After a step of ``dt`` [s] in which no free node moved faster than ``closing_m_s`` [m/s] relative to the
+    COG (their new velocities; the fastest node's speed plus the COG's bounds it): add how far they can have
+    closed on each other, keep that speed for the next step, and end the lists' use by anything but the next
+    step."""
     skin = state.near_skin
-    speed = vmax2 ** 0.5 + body_v2 ** 0.5
-    skin[NEAR_MOVED_M] += dt * speed
-    skin[NEAR_SPEED_M_S] = speed
+    skin[NEAR_MOVED_M] += dt * closing_m_s
+    skin[NEAR_SPEED_M_S] = closing_m_s
     skin[NEAR_ON] = 0.0
 
 
@@ -85,8 +88,8 @@ def note_moved(state, dt, vmax2, body_v2):
 def step_reach_m(model, state, h):
     """The farthest a point of a segment that can reach the anchor moves against the anchor's point beside it in a
     step of ``h`` [s], at the speeds the last step ended with (inf where not known) [m]:
-    h (fastest free node + COG + |omega| r), r = R + ``SKIN_M`` + the longest segment, stretched by as much as its
-    nodes can have moved apart since the build.
+    h (closing speed bound of :func:`note_moved` + |omega| r), r = R + ``SKIN_M`` + the longest segment,
+    stretched by as much as its nodes can have moved apart since the build.
 
     Why that r: a segment that reaches the sphere of radius R within the step lies within R + reach of the COG,
     so its nodes within R + reach + its length; while the reach fits in the skin (:func:`covers_step`), that is

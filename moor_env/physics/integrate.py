@@ -133,6 +133,7 @@ def step(model, state, t, dt, integrator, same_topology):
     worst_seg = args_strain[1]
     for c in range(N_BODY_STATE):
         body0[c] = body_state[c]
+    closing2 = 0.0
     if integrator == INTEGRATOR_SYMPLECTIC_EULER:
         vmax2, worst_node = _kick_drift_nodes(node_i, node_pos, node_vel, node_acc, node_pos, node_vel, dt, dt)
         body_v2 = 0.0
@@ -142,7 +143,7 @@ def step(model, state, t, dt, integrator, same_topology):
             wz = body0[BS_OMEGA + 2] + dt * body_acc[5]
             body_v2 = _kick_drift_body(body_state, body_acc, body0, dt, dt, wx, wy, wz, dt)
     elif integrator == INTEGRATOR_IMPLICIT_EULER:
-        vmax2, worst_node, body_v2 = implicit_euler_update(model, state, dt, same_topology)
+        vmax2, worst_node, body_v2, closing2 = implicit_euler_update(model, state, dt, same_topology)
     else:
         for n in range(node_i.shape[0]):
             for c in range(3):
@@ -190,7 +191,8 @@ def step(model, state, t, dt, integrator, same_topology):
             for c in range(3):
                 body_v2 += body_state[BS_VEL + c] ** 2
     if near:
-        note_moved(state, dt, vmax2, body_v2)
+        closing = closing2 ** 0.5 if integrator == INTEGRATOR_IMPLICIT_EULER else vmax2 ** 0.5 + body_v2 ** 0.5
+        note_moved(state, dt, closing)
     set_constrained_nodes(model, state, t + dt)
     apply_payout(dt, node_pos, node_vel, node_i, state.seg_i, state.seg_f, state.line_i, state.line_f)
     if max_strain != max_strain:

@@ -144,7 +144,7 @@ N_CONTACT_CACHE = 11
 # near_skin slots: the contact's list of what lies near the anchor (physics/contact_broadphase.py)
 NEAR_ON = 0  # 1 while the step's load evaluation uses the lists
 NEAR_MOVED_M = 1  # how far the nodes and the COG can have closed on each other since the lists were built [m]
-NEAR_SPEED_M_S = 2  # the fastest free node's speed plus the COG's after the last step (inf: not known) [m/s]
+NEAR_SPEED_M_S = 2  # a bound on the free nodes' speed relative to the COG after the last step (inf: not known) [m/s]
 NEAR_LONGEST_M = 3  # the longest active segment when the lists were built [m]
 N_NEAR = 4
 

@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import math
 
-from moor_env.physics._jit import jit_step
+from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.anchor_surface import (
     FEATURE_SHAFT,
     bounding_radius_m,
@@ -299,7 +299,7 @@ def segment_contact(node_pos, node_vel, node_i, node_mass, a, b, body_state, sha
     return e, fx, fy, fz, px, py, pz, nx, ny, nz, wx, wy, wz, mass, t, wa, wb, node_inside
 
 
-@jit_step
+@jit_no_refcount
 def add_segment_contact_loads(node_pos, node_vel, node_i, node_mass, seg_i, node_force, body_state, shape,
                               contact_f, seabed_z, contact_out, near_segs, listed_on):
     """Add every segment contact's force (module docstring) to its nodes' ``node_force`` (shares 1 - t and t, to

@@ -121,14 +121,14 @@ def test_lists_are_rebuilt_when_the_skin_closes():
     """Reference: the rule of ``contact_broadphase.prepare_near``: the lists are kept while the nodes and the COG
     can have closed less than ``SKIN_M - ROUNDING_M`` on each other by the end of the coming step (at the speeds
     the last step ended with, the anchor not turning), rebuilt from there on and at the first step of a call;
-    ``note_moved`` adds dt (fastest node + COG speed), keeps that speed and ends the lists' use. The implicit
+    ``note_moved`` adds dt times the closing speed, keeps that speed and ends the lists' use. The implicit
     step's segment pass uses the list only while the step's reach fits in the skin and the speeds are known."""
     sim = _released("vertical-chain")
     model, state = sim.records()
     prepare_near(model, state, False, 0.1)
     assert state.near_skin[L.NEAR_ON] == 1.0 and state.near_skin[L.NEAR_MOVED_M] == 0.0
     assert not covers_step(model, state, 1e-6)  # no speed known at the first step of a call
-    note_moved(state, 0.5, 9.0, 1.0)  # 0.5 s at 3 + 1 m/s
+    note_moved(state, 0.5, 4.0)  # 0.5 s at 4 m/s
     assert state.near_skin[L.NEAR_MOVED_M] == 2.0 and state.near_skin[L.NEAR_ON] == 0.0
     assert state.near_skin[L.NEAR_SPEED_M_S] == 4.0
     # steps of 0.1 s at 4 m/s close 0.4 m
@@ -144,3 +144,25 @@ def test_lists_are_rebuilt_when_the_skin_closes():
     state.near_skin[L.NEAR_SPEED_M_S] = 4.0
     state.near_skin[L.NEAR_MOVED_M] = 1.5
     assert covers_step(model, state, 0.1) and not covers_step(model, state, 0.2)
+
+
+@pytest.mark.parametrize("integrator", ["symplectic_euler", "implicit_euler"])
+def test_closing_speed_bounds_every_node_against_the_cog(integrator):
+    """Reference: the free nodes' velocities and the COG's after each step of the vertical-chain fall (the chain
+    catches up with the anchor). The speed the skin is closed at bounds every free node's speed relative to the
+    COG: the implicit step gives the fastest relative speed itself (equal within rounding of the norm), the
+    explicit step the fastest node's speed plus the COG's (at least the relative one). Tolerance 1e-12 relative."""
+    sim = _released("vertical-chain", integrator=integrator)
+    free = sim.state.node_i[:, L.NI_KIND] == L.NODE_FREE
+    for _ in range(60):
+        sim.advance_to(sim.state.t + 5 * sim.dt)
+        _, state = sim.records()
+        v = state.node_vel[free]
+        vg = state.body_state[L.BS_VEL:L.BS_VEL + 3]
+        relative = np.sqrt(np.max(np.sum((v - vg) ** 2, axis=1)))
+        closing = state.near_skin[L.NEAR_SPEED_M_S]
+        if integrator == "implicit_euler":
+            assert closing == pytest.approx(relative, rel=1e-12)
+        else:
+            summed = np.sqrt(np.max(np.sum(v ** 2, axis=1))) + np.linalg.norm(vg)
+            assert closing == pytest.approx(summed, rel=1e-12) and closing >= relative * (1 - 1e-12)
