@@ -1,5 +1,6 @@
-"""The coarse equilibrium of a static solve: the scene's hanging equilibrium at the segment lengths of the
-``COARSE_PRESET`` preset, for lines finer than those (``moor_env.simulation.solve_statics``).
+"""The coarse equilibrium of a static solve: the scene's hanging equilibrium with its lines that are finer than the
+``COARSE_PRESET`` preset's at that preset's segment lengths, the others at their own
+(``moor_env.simulation.solve_statics``).
 
 It serves twice, solved at most once per solve (:class:`CoarseStart`):
 
@@ -66,10 +67,12 @@ def _segments(preset: str) -> tuple[tuple[str, float], ...]:
 
 
 def coarse_keys(model: Model, preset: str = COARSE_PRESET) -> dict | None:
-    """The segment lengths of ``preset``, or None where the model's lines are no finer."""
+    """The segment lengths of the coarse compile: ``preset``'s where the model's lines are finer, the model's own
+    where they are not (a fitted preset may be coarser than ``preset`` on the fibre and the wire, and a coarse
+    compile that refined them would cost more and map less exactly); None where no line is finer."""
     disc = model.scene.discretization
-    keys = dict(_segments(preset))
-    return None if all(getattr(disc, k) >= v for k, v in keys.items()) else keys
+    keys = {k: max(v, getattr(disc, k)) for k, v in _segments(preset)}
+    return None if all(getattr(disc, k) == v for k, v in keys.items()) else keys
 
 
 class CoarseStart:
