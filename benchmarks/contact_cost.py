@@ -53,6 +53,7 @@ def prepared(scene: str, integrator: str, contact: str):
 def _fall(sim, saved) -> tuple[float, dict]:
     """One fall from the saved state: CPU seconds per step (process time: the machine is shared) and the result."""
     sim.state = saved.copy()
+    builds0 = sim.work.near_skin[L.NEAR_BUILDS]
     cpu0 = time.process_time()
     result = run_drop(sim, history=False)
     per_step = (time.process_time() - cpu0) / result.n_steps
@@ -61,7 +62,7 @@ def _fall(sim, saved) -> tuple[float, dict]:
                       "chain_on_anchor_m": result.chain_on_anchor_m,
                       "contact_peak_force_n": result.contact_peak_force_n,
                       "contact_peak_depth_m": result.contact_peak_depth_m, "n_steps": result.n_steps,
-                      "dt_s": result.dt_s}
+                      "dt_s": result.dt_s, "list_builds": int(sim.work.near_skin[L.NEAR_BUILDS] - builds0)}
 
 
 def solves_per_step(sim, saved) -> dict:
@@ -137,12 +138,13 @@ def docs_blocks(out: dict) -> list[tuple[Path, str, str]]:
                      f"{off['us_per_step']:.1f}", f"{on['us_per_step']:.1f}",
                      f"{100 * (on['us_per_step'] / off['us_per_step'] - 1):+.0f} % "
                      f"({100 * (on['median_pair_ratio'] - 1):+.0f} %, {on['pairs']})",
+                     f"{on['list_builds']} / {on['n_steps']}",
                      f"{off['solves_per_step']:.2f} / {on['solves_per_step']:.2f} "
                      f"({on['contact_solves_per_step']:.2f})" if "solves_per_step" in on else "-"])
     text = "\n".join([run_line(out, COMMAND), "", table(
         ["scene", "integrator", "touchdown [m/s] without contact", "with", "chain past back end [m] without",
          "with", "chain on anchor [m]", "deepest node [mm]", "peak contact force [MN]", "us/step without", "with",
-         "cost (median over pairs of falls, pairs)", "solves/step without / with (asked by the contact)"], rows)])
+         "cost (median over pairs of falls, pairs)", "contact lists built / steps", "solves/step without / with (asked by the contact)"], rows)])
     return [(DOC, "contact_cost", text)]
 
 

@@ -362,12 +362,12 @@ def test_first_try_from_the_guess_made_before_it_is_the_solve_from_the_guess():
     assert np.array_equal(given.state.body_state, own.state.body_state)
 
 
-# The statics benchmark's scene 818 (seed 0), as drawn: accurate lines, the loop against the anchor in current.
-LOOP_ON_ANCHOR_ACCURATE = {"water_depth_m": 589.0699279300381, "vessel_spacing_m": 7.147694530877383,
-                           "mooring_line_length_m": 625.2230721776377, "vertical_chain_length_m": 38.876581418505495,
-                           "drop_height_m": 61.2644861599026, "current_scale": 0.9943416996816268,
-                           "current_direction_deg": 150.75864856403774, "anchor_mass_scale": 0.9227355562656728,
-                           "fidelity": "accurate"}
+# The statics benchmark's scene 858 (seed 0), as drawn: accurate lines in strong current.
+MIDDLE_START_SCENE = {"water_depth_m": 521.3187685758196, "vessel_spacing_m": 104.39486132607722,
+                      "mooring_line_length_m": 663.0626061784261, "vertical_chain_length_m": 49.39393517912686,
+                      "drop_height_m": 69.61350056308297, "current_scale": 1.1153825619757374,
+                      "current_direction_deg": 256.97462468313785, "anchor_mass_scale": 0.9054091781961712,
+                      "fidelity": "accurate"}
 
 
 def test_middle_start_solves_lines_the_fast_start_does_not():
@@ -378,7 +378,7 @@ def test_middle_start_solves_lines_the_fast_start_does_not():
     from moor_env.coarse_start import MIDDLE_PRESET, CoarseStart
     from moor_env.simulation import _coarse_solve
 
-    model = compile_scene(load_scene("gjoa-500", LOOP_ON_ANCHOR_ACCURATE))
+    model = compile_scene(load_scene("gjoa-500", MIDDLE_START_SCENE))
     assert _coarse_start(Simulator(model)).start(progress=False) is None
     sim = Simulator(model)
     assert CoarseStart(sim, functools.partial(_coarse_solve, progress=False), MIDDLE_PRESET).start(False) is not None

@@ -43,6 +43,7 @@ from moor_env.physics.anchor_surface import bounding_radius_m
 from moor_env.physics.layout import (
     BS_OMEGA,
     BS_POS,
+    NEAR_BUILDS,
     NEAR_LONGEST_M,
     NEAR_MOVED_M,
     NEAR_ON,
@@ -69,6 +70,7 @@ def prepare_near(model, state, same_topology, dt):
     if not same_topology or not skin[NEAR_MOVED_M] + step_reach_m(model, state, dt) < SKIN_M - ROUNDING_M:
         _build(model, state)
         skin[NEAR_MOVED_M] = 0.0
+        skin[NEAR_BUILDS] += 1.0
     skin[NEAR_ON] = 1.0
 
 
