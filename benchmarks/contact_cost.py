@@ -144,7 +144,8 @@ def docs_blocks(out: dict) -> list[tuple[Path, str, str]]:
     text = "\n".join([run_line(out, COMMAND), "", table(
         ["scene", "integrator", "touchdown [m/s] without contact", "with", "chain past back end [m] without",
          "with", "chain on anchor [m]", "deepest node [mm]", "peak contact force [MN]", "us/step without", "with",
-         "cost (median over pairs of falls, pairs)", "contact lists built / steps", "solves/step without / with (asked by the contact)"], rows)])
+         "cost (median over pairs of falls, pairs)", "contact lists built / steps",
+         "solves/step without / with (asked by the contact)"], rows)])
     return [(DOC, "contact_cost", text)]
 
 
