@@ -76,8 +76,8 @@ def coarse_keys(model: Model, preset: str = COARSE_PRESET) -> dict | None:
 
 
 class CoarseStart:
-    """The coarse equilibrium of one static solve of ``sim`` (at the segment lengths of ``preset``), solved on first
-    use.
+    """The coarse equilibrium of one static solve of ``sim`` (its lines finer than ``preset``'s at that preset's
+    segment lengths, :func:`coarse_keys`), solved on first use.
 
     ``solve(model)`` is the hanging equilibrium of a compiled model without the refusals of an
     equilibrium (:class:`~moor_env.simulation.StaticResult`): the coarse one is checked here, the fine lines'
@@ -123,7 +123,7 @@ class CoarseStart:
         resting = 0 if coarse is None else fibre_on_seabed(coarse.simulator)[0]
         if resting >= REFUSED_FROM_NODES:
             raise fibre_refusal(self.sim, f"{resting} of its nodes on it in the equilibrium of the scene at the "
-                                          f"{self.preset} preset's segment lengths")
+                                          f"{self.preset} preset's segment lengths where finer")
 
     def start(self, progress: bool):
         """Solve the fine lines from the coarse equilibrium mapped onto them; the report (iterations of both
@@ -169,5 +169,5 @@ def _fibre_refusal(resting: int, fine: Simulator, preset: str) -> NoEquilibrium 
     ``resting`` fibre nodes on the seabed, its cause saying where it was found, or None where it rests none."""
     if resting == 0:
         return None
-    return fibre_refusal(fine, f"in the equilibrium of the scene at the {preset} preset's segment lengths; "
+    return fibre_refusal(fine, f"in the equilibrium of the scene at the {preset} preset's segment lengths where finer; "
                                f"its own lines did not converge within {FIRST_TRY_ITERATIONS} iterations from it")

@@ -14,14 +14,15 @@ FITTED_FAST = {"water_depth_m": 1107.0, "vessel_spacing_m": 222.0, "mooring_line
 
 
 def test_coarse_compile_coarsens_only_the_finer_lines():
-    """Reference: the preset's segment lengths and the model's. A line finer than the coarse preset's takes the
+    """Reference: the fast preset's segment lengths (vertical and loop chain 2 m, fibre rope 20 m, wire 30 m) and
+    the fitted model's (chain 1 m and 0.5 m, fibre rope 50 m, wire 100 m). A line finer than the preset's takes the
     preset's length; a line already coarser keeps its own (the coarse compile never refines a line)."""
-    disc = compile_scene(load_scene("gjoa-500", FITTED_FAST)).scene.discretization
-    preset = {k: v for k, v in fidelity_presets()["fast"].items() if k.endswith("_segment_m")}
-    own = {k: getattr(disc, k) for k in preset}
-    assert any(own[k] < preset[k] for k in preset) and any(own[k] > preset[k] for k in preset)
-    keys = coarse_keys(compile_scene(load_scene("gjoa-500", FITTED_FAST)))
-    assert keys == {k: max(own[k], preset[k]) for k in preset}
+    model = compile_scene(load_scene("gjoa-500", FITTED_FAST))
+    disc = model.scene.discretization
+    assert (disc.vertical_chain_segment_m, disc.loop_chain_segment_m, disc.fibre_segment_m,
+            disc.wire_segment_m) == (1.0, 0.5, 50.0, 100.0)
+    assert coarse_keys(model) == {"vertical_chain_segment_m": 2.0, "loop_chain_segment_m": 2.0,
+                                  "fibre_segment_m": 50.0, "wire_segment_m": 100.0}
 
 
 def test_no_coarse_compile_for_lines_no_finer_than_the_preset():

@@ -11,8 +11,8 @@ free nodes' speeds). The contact's load passes (``contact.add_contact_loads``,
 closed the skin: the sum over the steps since the list was built of dt times a bound on the free nodes' speeds
 relative to the COG, each taken after the step (the explicit and implicit Euler steps move every point by dt times
 its new velocity), stays below ``SKIN_M``. The implicit step gives the fastest node's relative speed itself, from
-the loop that updates the nodes; the explicit step gives the fastest node's speed plus the COG's (its lists last
-about a hundred steps, and a pass for the relative speeds would cost more than the rebuilds it saves). Every node or
+the loop that updates the nodes; the explicit step gives the fastest node's speed plus the COG's (with it a list
+lasts about 180 steps of the bundled scenes' falls, ``benchmarks/contact_cost.py``). Every node or
 segment left out then lies outside the sphere, where the contact's force is zero, so the forces, their order of
 summation and every result are bit for bit those of a pass over all.
 
@@ -30,8 +30,9 @@ gets no law in the step. Where that reach fits in what is left of the skin, ever
 the step's segment set is that of a pass over all. The speeds are known from the second
 step of an ``advance`` call on; the lists are rebuilt a step early where the next step's reach would not fit.
 
-The skin: 2 m is about 100 explicit steps of a fall at 25 m/s (0.34 ms steps) and two implicit steps (11 ms),
-and it adds to the list only the chain within 2 m of the sphere.
+The skin: 2 m is about 100 explicit steps of a node falling at 25 m/s onto the anchor (0.34 ms steps) and two
+implicit steps (11 ms); a chain that falls with the anchor keeps a list for many more (``benchmarks/contact_cost.py``
+counts them). It adds to the list only the chain within 2 m of the sphere.
 """
 
 from __future__ import annotations

@@ -260,7 +260,7 @@ def implicit_euler_update(model, state, h, reuse_order):
         Squared speed of the anchor's COG.
     closing2 : float
         Largest squared speed of a free node relative to the COG (the line-anchor contact's neighbour list,
-        ``contact_broadphase.note_moved``; 0 without an active anchor).
+        ``contact_broadphase.note_moved``; 0 without the contact).
     """
     node_pos, node_vel, body_state = state.node_pos, state.node_vel, state.body_state
     node_i, node_acc, body_acc = state.node_i, state.node_acc, state.body_acc
@@ -318,9 +318,9 @@ def implicit_euler_update(model, state, h, reuse_order):
     closing2 = 0.0
     worst = -1
     inv_h = 1.0 / h
-    gvx = body_state[BS_VEL] if body_active else 0.0
-    gvy = body_state[BS_VEL + 1] if body_active else 0.0
-    gvz = body_state[BS_VEL + 2] if body_active else 0.0
+    gvx = body_state[BS_VEL] if contact else 0.0
+    gvy = body_state[BS_VEL + 1] if contact else 0.0
+    gvz = body_state[BS_VEL + 2] if contact else 0.0
     for n in range(nn):
         if node_i[n, NI_KIND] != NODE_FREE:
             continue
@@ -332,7 +332,7 @@ def implicit_euler_update(model, state, h, reuse_order):
             node_pos[n, c] += h * v
             node_acc[n, c] = dv * inv_h
             v2 += v * v
-        if body_active:
+        if contact:
             closing2 = max(closing2, (node_vel[n, 0] - gvx) ** 2 + (node_vel[n, 1] - gvy) ** 2
                            + (node_vel[n, 2] - gvz) ** 2)
         if not (v2 <= vmax2):

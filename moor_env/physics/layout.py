@@ -146,7 +146,7 @@ NEAR_ON = 0  # 1 while the step's load evaluation uses the lists
 NEAR_MOVED_M = 1  # how far the nodes and the COG can have closed on each other since the lists were built [m]
 NEAR_SPEED_M_S = 2  # a bound on the free nodes' speed relative to the COG after the last step (inf: not known) [m/s]
 NEAR_LONGEST_M = 3  # the longest active segment when the lists were built [m]
-NEAR_BUILDS = 4  # how many times the lists were built on this state (a count for the benchmarks)
+NEAR_BUILDS = 4  # how many times the lists were built in this workspace (a count for the benchmarks)
 N_NEAR = 5
 
 # contact_shape columns: the anchor's surface as coaxial cylinders (physics/contact.py)
