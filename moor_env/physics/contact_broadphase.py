@@ -11,8 +11,8 @@ free nodes' speeds). The contact's load passes (``contact.add_contact_loads``,
 closed the skin: the sum over the steps since the list was built of dt times a bound on the free nodes' speeds
 relative to the COG, each taken after the step (the explicit and implicit Euler steps move every point by dt times
 its new velocity), stays below ``SKIN_M``. The implicit step gives the fastest node's relative speed itself, from
-the loop that updates the nodes; the explicit step gives the fastest node's speed plus the COG's (with it a list
-lasts about 180 steps of the bundled scenes' falls, ``benchmarks/contact_cost.py``). Every node or
+the loop that updates the nodes; the explicit step gives the fastest node's speed plus the COG's
+(``benchmarks/contact_cost.py`` counts the lists each fall builds). Every node or
 segment left out then lies outside the sphere, where the contact's force is zero, so the forces, their order of
 summation and every result are bit for bit those of a pass over all.
 
