@@ -72,9 +72,10 @@ import numpy as np
 
 from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.anchor import body_acceleration, rotate_axis
+from moor_env.physics.contact import record_contact_force
 from moor_env.physics.implicit_active_set import init_active_set, segment_gain, update_active_set
 from moor_env.physics.implicit_assembly import assemble
-from moor_env.physics.implicit_contact import assemble_contact, contact_reaction
+from moor_env.physics.implicit_contact import any_law, assemble_contact, contact_reaction
 from moor_env.physics.implicit_contact_set import init_contact_set, update_contact_set
 from moor_env.physics.layout import (
     BF_ACTIVE,
@@ -282,7 +283,7 @@ def implicit_euler_update(model, state, h, reuse_order):
     c0 = c1 = c2 = c3 = c4 = c5 = 0.0
     for it in range(MAX_ACTIVE_SET_SOLVES):
         assemble(h, it == 0, body_node, model, state, orow)
-        if contact:
+        if contact and any_law(state.contact_set, state.segment_set):
             assemble_contact(h, model, state)
         eliminate(h, nq, model, state, tree, orow)
         if body_node >= 0:
@@ -294,7 +295,9 @@ def implicit_euler_update(model, state, h, reuse_order):
         if changed == 0:
             break
     body_v2 = 0.0
-    if contact and contact_reaction(h, model, state):
+    if contact and not any_law(state.contact_set, state.segment_set):
+        record_contact_force(state.contact_out, 0.0, 0.0, 0.0)
+    elif contact and contact_reaction(h, model, state):
         # the anchor takes the opposite of the contact impulses the solve gave the nodes
         body_acceleration(body_state, model.body_f, state.body_load, body_acc)
     if body_active:

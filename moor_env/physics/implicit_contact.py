@@ -211,6 +211,23 @@ def _law_mode(mode):
     return mode
 
 
+@jit_step(inline="always")
+def any_law(contact_set, segment_set):
+    """Whether the step's contact set (``state.contact_set``, ``state.segment_set``) gives any node or segment a
+    law. Without one the step's contact terms and reaction are zero, and the integrator skips
+    :func:`assemble_contact` and :func:`contact_reaction`: a call that takes the records passes their every array
+    (about 0.1 us), and on most steps of a fall no line touches the anchor."""
+    if segment_set.shape[0] > 0 and segment_set[0] >= 0:
+        return True
+    for k in range(contact_set.shape[0]):
+        n, mode = candidate(contact_set, k)
+        if n < 0:
+            break
+        if _law_mode(mode) != SET_OUT:
+            return True
+    return False
+
+
 @jit_no_refcount
 def assemble_contact(h, model, state):
     """Add every candidate's contact terms (:func:`contact_terms`) to its block (``node_mm``) and right-hand side

@@ -24,7 +24,9 @@ by less than EA 1e-8 / 2 on a segment at zero strain, far less elsewhere) and th
 does not converge (``method="auto"``), except where a line rests on the anchor: the relaxation does not converge
 there either, so the solve stops with the vessel spacing named as the key to change. Before that fallback,
 ``moor_env.simulation.solve_statics`` tries Newton's method from a coarse compile's equilibrium mapped onto the
-lines (``mapped``) where it has not converged from the first guess within a few hundred iterations.
+lines (``mapped``) where it has not converged from the first guess within a few hundred iterations; such a start
+is solved first with the tension-only law's kink rounded more (``statics_stages.soften_slack``), and again without
+that where it does not converge so.
 """
 
 from __future__ import annotations
@@ -62,6 +64,7 @@ from moor_env.physics.statics_stages import (
     apply_current,
     body_root,
     restore_state,
+    soften_slack,
     stiffen_contact,
 )
 
@@ -69,6 +72,7 @@ __all__ = ["SMOOTHING_FINAL", "n_static_dofs", "solve_equilibrium", "solve_newto
 
 MAX_ITERATIONS = 2000
 RAMP_DEPTH_M = 0.01  # a start with a line deeper than this inside the anchor takes the ramp (at rest: < 1 mm)
+SOFTENED_START_ITERATIONS = 400  # a mapped start's iterations at most with the slack law softened first
 METHODS = ("auto", "newton", "relaxation")
 
 
@@ -102,9 +106,11 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS
         raise ConfigError("method", method, "one of " + ", ".join(METHODS))
     start = sim.state.copy()
     if method != "relaxation":
-        report = _by_newton(sim, start, method, {"tol_rel": tol_rel, "max_iter": max_iter, "max_step_m": max_step_m,
-                                                 "warm": warm, "analytic_guess": analytic_guess,
-                                                 "progress": progress, "mapped": mapped})
+        args = {"tol_rel": tol_rel, "max_iter": max_iter, "max_step_m": max_step_m, "warm": warm,
+                "analytic_guess": analytic_guess, "progress": progress, "mapped": mapped}
+        report = _softened(sim, start, args) if mapped else None
+        if report is None:
+            report = _by_newton(sim, start, method, {**args, "soften": False})
         if report is not None:
             return report
         restore_state(sim.state, start)
@@ -116,6 +122,18 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS
                                                             analytic_guess=analytic_guess, tick=bar.update)
         except SimulationDiverged as exc:
             raise _as_not_converged(exc) from exc
+
+
+def _softened(sim, start, args: dict) -> StaticsReport | None:
+    """A mapped start's first try: Newton's method with the slack law softened first
+    (``statics_stages.soften_slack``), ``SOFTENED_START_ITERATIONS`` at most; None (the state back at ``start``)
+    where it does not converge, and the mapped start is solved again without it."""
+    try:
+        return _by_newton(sim, start, "newton", {**args, "soften": True,
+                                                 "max_iter": min(args["max_iter"], SOFTENED_START_ITERATIONS)})
+    except StaticsNotConverged:
+        restore_state(sim.state, start)
+        return None
 
 
 def _by_newton(sim, start, method: str, args: dict) -> StaticsReport | None:
@@ -138,7 +156,7 @@ def _by_newton(sim, start, method: str, args: dict) -> StaticsReport | None:
             restore_state(sim.state, start)
             return solve_newton(sim, **args, contact=True)
         # from the equilibrium without the contact, in the scene's current
-        report = solve_newton(sim, **{**args, "warm": True, "analytic_guess": False}, contact=True)
+        report = solve_newton(sim, **{**args, "warm": True, "analytic_guess": False, "soften": False}, contact=True)
         return dataclasses.replace(report, iterations=report.iterations + clear.iterations)
     except (StaticsNotConverged, SimulationDiverged) as exc:
         if method == "newton" or getattr(exc, "line_on_anchor", False):
@@ -173,7 +191,7 @@ def _stop(st) -> None:
 
 def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max_step_m: float = 20.0,
                  warm: bool = False, analytic_guess: bool = True, progress: bool = True,
-                 contact: bool = True, mapped: bool = False) -> StaticsReport:
+                 contact: bool = True, mapped: bool = False, soften: bool = False) -> StaticsReport:
     """Drive the simulator's current state to static equilibrium in place by Newton's method.
 
     The calm equilibrium is solved first from the guess, then the scene's current in one stage of at most
@@ -206,6 +224,8 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max
     mapped : bool
         With ``warm``: the state is an equilibrium of a coarser compile of the scene mapped onto this one
         (:func:`moor_env.remesh.remesh_state`), whose slack segments start slack (``statics_stages.slack_counts``).
+    soften : bool
+        Solve the first stage on the smoothed slack law first (``statics_stages.soften_slack``).
 
     Raises
     ------
@@ -214,11 +234,11 @@ def solve_newton(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max
         From the first guess: the scene has no equilibrium (named cause and key).
     """
     with contextlib.nullcontext() if contact else _contact_off(sim):
-        return _newton(sim, tol_rel, max_iter, max_step_m, warm, analytic_guess, progress, mapped)
+        return _newton(sim, tol_rel, max_iter, max_step_m, warm, analytic_guess, progress, mapped, soften)
 
 
 def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, analytic_guess: bool,
-            progress: bool, mapped: bool) -> StaticsReport:
+            progress: bool, mapped: bool, soften: bool) -> StaticsReport:
     n_dofs = n_static_dofs(sim)
     if n_dofs == 0:  # nothing to solve (e.g. an anchor held at its drop height, no lines)
         return StaticsReport(0, 0.0, 0.0, 0, "newton")
@@ -235,6 +255,8 @@ def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, a
     start_inside = _line_inside(sim) > 0.0
     try:
         calm = 0.0 if current > 0.0 and not warm else current
+        if soften:
+            soften_slack(stage, calm, SMOOTHING_FINAL)
         if depth_m > RAMP_DEPTH_M:
             stiffen_contact(stage, calm)
         final = calm == current

@@ -480,3 +480,29 @@ def test_implicit_linearisation_is_the_laws_derivative():
     expected = h * -jac[1] + h * h * k * np.outer(n, n)
     got = np.array([[block[0], block[3], block[4]], [block[3], block[1], block[5]], [block[4], block[5], block[2]]])
     assert np.allclose(got, expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max())
+
+
+@pytest.mark.parametrize("modes, segments, expected", [
+    ((), (), False),
+    (("SET_OUT", "SET_MISSED"), (), False),  # a missed node carries no law
+    (("SET_OUT", "SET_COMING"), (), True),  # a coming node carries an entering node's
+    (("SET_IN",), (), True),
+    (("SET_LEFT",), (), True),  # its start-of-step force is taken back in the solve
+    (("SET_ENTERED",), (), True),
+    (("SET_OUT",), ("SET_IN",), True),  # a segment in the set always carries its law
+])
+def test_any_law_sees_every_node_and_segment_with_a_law(modes, segments, expected):
+    """The implicit step skips the contact's terms and reaction where :func:`implicit_contact.any_law` says no
+    candidate and no segment carries a law; an entry past the list's end (-1) is not read."""
+    from moor_env.physics import implicit_contact as IC
+
+    def listed(names, size=6):
+        out = np.zeros(size, np.int64)  # zeros past the end: node 0 in SET_OUT, never read
+        for k, name in enumerate(names):
+            out[k] = ((k + 3) << IC.SET_BITS) | getattr(IC, name)
+        if len(names) < size:
+            out[len(names)] = -1
+            out[len(names) + 1:] = (9 << IC.SET_BITS) | IC.SET_IN  # stale entries past the end
+        return out
+
+    assert IC.any_law(listed(modes), listed(segments)) is expected
