@@ -19,7 +19,8 @@ raised in decades from a hundred-thousandth of its own (``statics_stages.CONTACT
 pushed out gradually and the loop follows.
 
 All of it runs on the tension-only law smoothed at strain scale ``SMOOTHING_FINAL`` (it differs from the exact law
-by less than EA 1e-8 / 2 on a segment at zero strain, far less elsewhere) and the exact seabed contact.
+by less than EA 1e-8 / 2 on a segment at zero strain, far less elsewhere; only a mapped start's first stages are
+smoothed more, below) and the exact seabed contact.
 :func:`solve_equilibrium` finishes with the slow solver of ``physics/statics_relaxation.py`` where Newton's method
 does not converge (``method="auto"``), except where a line rests on the anchor: the relaxation does not converge
 there either, so the solve stops with the vessel spacing named as the key to change. Before that fallback,
@@ -72,7 +73,7 @@ __all__ = ["SMOOTHING_FINAL", "n_static_dofs", "solve_equilibrium", "solve_newto
 
 MAX_ITERATIONS = 2000
 RAMP_DEPTH_M = 0.01  # a start with a line deeper than this inside the anchor takes the ramp (at rest: < 1 mm)
-SOFTENED_START_ITERATIONS = 400  # a mapped start's iterations at most with the slack law softened first
+SOFTENED_START_ITERATIONS = 400  # a mapped start's iterations at most with the slack law softened first (per solve)
 METHODS = ("auto", "newton", "relaxation")
 
 
@@ -108,7 +109,7 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS
     if method != "relaxation":
         args = {"tol_rel": tol_rel, "max_iter": max_iter, "max_step_m": max_step_m, "warm": warm,
                 "analytic_guess": analytic_guess, "progress": progress, "mapped": mapped}
-        report = _softened(sim, start, args) if mapped else None
+        report = _softened(sim, start, args) if mapped and max_iter > SOFTENED_START_ITERATIONS else None
         if report is None:
             report = _by_newton(sim, start, method, {**args, "soften": False})
         if report is not None:
@@ -126,8 +127,10 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS
 
 def _softened(sim, start, args: dict) -> StaticsReport | None:
     """A mapped start's first try: Newton's method with the slack law softened first
-    (``statics_stages.soften_slack``), ``SOFTENED_START_ITERATIONS`` at most; None (the state back at ``start``)
-    where it does not converge, and the mapped start is solved again without it."""
+    (``statics_stages.soften_slack``), ``SOFTENED_START_ITERATIONS`` at most in each solve (without the line-anchor
+    contact, then with it); None (the state back at ``start``) where it does not converge, and the mapped start is
+    solved again without it. Only for a mapped start's full budget: within a shorter one the softened stages would
+    leave the last stage too few iterations."""
     try:
         return _by_newton(sim, start, "newton", {**args, "soften": True,
                                                  "max_iter": min(args["max_iter"], SOFTENED_START_ITERATIONS)})
@@ -255,10 +258,10 @@ def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, a
     start_inside = _line_inside(sim) > 0.0
     try:
         calm = 0.0 if current > 0.0 and not warm else current
-        if soften:
-            soften_slack(stage, calm, SMOOTHING_FINAL)
         if depth_m > RAMP_DEPTH_M:
             stiffen_contact(stage, calm)
+        if soften:
+            soften_slack(stage, calm)
         final = calm == current
         done = stage.run(calm, tol_rel if final else STAGE_TOLERANCE, STEP_TOLERANCE_M if final else STAGE_STEP_M,
                          max_iter)

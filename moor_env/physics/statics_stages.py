@@ -1,6 +1,7 @@
 """The static solver's stages: the Newton kernel run in chunks on one current scale (:class:`Stage`), the scene's
-current applied from the calm equilibrium (:func:`apply_current`), and the line-anchor contact's stiffness raised
-in decades (:func:`stiffen_contact`); the order of the stages is ``physics/statics.py``'s.
+current applied from the calm equilibrium (:func:`apply_current`), the line-anchor contact's stiffness raised
+in decades (:func:`stiffen_contact`) and the slack law's kink sharpened in steps (:func:`soften_slack`); the order
+of the stages is ``physics/statics.py``'s.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from moor_env.physics.statics_newton import (
     C_STEP_TOL,
     C_TAU,
     C_TOL,
+    SMOOTHING_FINAL,
     STATUS_CONVERGED,
     STATUS_RUNNING,
     STEP_TOLERANCE_M,
@@ -143,10 +145,10 @@ def stiffen_contact(stage: Stage, scale: float) -> None:
     stage.ctl[C_TAU] = TAU_START_S
 
 
-def soften_slack(stage: Stage, scale: float, final: float) -> None:
+def soften_slack(stage: Stage, scale: float) -> None:
     """Solve the problem at current scale ``scale`` (to the stage tolerance, ``SMOOTHED_STAGE_ITERATIONS`` at most
-    each) on the tension-only law smoothed at each strain scale of ``SLACK_SMOOTHING_RAMP``, then set the
-    smoothing to ``final``.
+    each) on the tension-only law smoothed at each strain scale of ``SLACK_SMOOTHING_RAMP``; the smoothing is
+    ``SMOOTHING_FINAL`` again afterwards.
 
     Why: a coarse equilibrium mapped onto finer lines (``moor_env.remesh``) puts many short segments near zero
     strain, where the law's kink makes the Newton step jump between slack and taut states; a smoothed kink (1e-4:
@@ -159,7 +161,7 @@ def soften_slack(stage: Stage, scale: float, final: float) -> None:
             stage.sim.env_f[L.EF_SLACK_SMOOTHING] = strain
             stage.run(scale, STAGE_TOLERANCE, STAGE_STEP_M, SMOOTHED_STAGE_ITERATIONS)
     finally:
-        stage.sim.env_f[L.EF_SLACK_SMOOTHING] = final
+        stage.sim.env_f[L.EF_SLACK_SMOOTHING] = SMOOTHING_FINAL
 
 
 def apply_current(stage: Stage, current: float, tol_rel: float, max_iter: int) -> bool:

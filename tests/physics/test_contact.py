@@ -506,3 +506,16 @@ def test_any_law_sees_every_node_and_segment_with_a_law(modes, segments, expecte
         return out
 
     assert IC.any_law(listed(modes), listed(segments)) is expected
+
+
+def test_any_law_on_lists_without_an_end_marker():
+    """A list as long as the nodes (segments) has no -1 after its last entry; an empty one has no entry at all."""
+    from moor_env.physics import implicit_contact as IC
+
+    full_out = np.array([(3 << IC.SET_BITS) | IC.SET_OUT, (4 << IC.SET_BITS) | IC.SET_MISSED])
+    full_in = np.array([(3 << IC.SET_BITS) | IC.SET_OUT, (4 << IC.SET_BITS) | IC.SET_IN])
+    empty = np.zeros(0, np.int64)
+    assert IC.any_law(full_out, empty) is False
+    assert IC.any_law(full_in, empty) is True
+    assert IC.any_law(empty, np.array([(2 << IC.SET_BITS) | IC.SET_ENTERED])) is True
+    assert IC.any_law(empty, empty) is False
