@@ -216,7 +216,8 @@ def any_law(contact_set, segment_set):
     """Whether the step's contact set (``state.contact_set``, ``state.segment_set``) gives any node or segment a
     law. Without one the step's contact terms and reaction are zero, and the integrator skips
     :func:`assemble_contact` and :func:`contact_reaction`: a call that takes the records passes their every array
-    (about 0.1 us), and on most steps of a fall no line touches the anchor."""
+    (about 0.1 us), and until a chain lands on the anchor no line touches it (about half the steps of the implicit
+    falls of the vertical-chain and gjoa-500 scenes)."""
     if segment_set.shape[0] > 0 and segment_set[0] >= 0:
         return True
     for k in range(contact_set.shape[0]):
