@@ -61,10 +61,16 @@ jit = functools.partial(numba.njit, cache=True, nogil=True, fastmath=FASTMATH_FL
 jit_step = functools.partial(jit, error_model="numpy")
 
 # ``jit_step`` without numba's reference counting (NRT), for the kernels that take the records
-# (``physics/records.py``) every time step and allocate nothing. numba increments and decrements the reference
-# count of every array argument it unpacks on each call, an atomic operation each, and a record holds about thirty
-# arrays: on the vertical chain that was about a tenth of an explicit step. Such a kernel may not allocate (numba
-# refuses to compile it) nor keep an array beyond the call. The implicit step's own entry points keep ``jit_step``:
-# without the calls LLVM inlines them into the step and fuses the anchor's acceleration update differently, which
-# moves results by rounding.
+# (``physics/records.py``) every time step and allocate nothing, the step itself included (``integrate.step``,
+# ``implicit.implicit_euler_update``). numba increments and decrements the reference count of every array argument
+# it unpacks on each call, an atomic operation each, and a record holds about thirty arrays: on the vertical chain
+# that was about a tenth of an explicit step. Such a kernel may not allocate (numba refuses to compile it) nor keep
+# an array beyond the call.
+#
+# Calls cost too: numba passes an array as its seven to nine fields, so a call that LLVM does not inline passes
+# tens of arguments, and a call that takes the records about three hundred. The line-anchor contact's helpers
+# called per node or segment (the anchor's surface distance, the law, the cheap segment tests) and its passes
+# called per step are therefore inlined by numba (``inline="always"``) into the load evaluation and the implicit
+# step: as calls they cost as much as the law itself (on the vertical chain, inlining halved the law's cost per
+# node).
 jit_no_refcount = functools.partial(jit_step, _nrt=False)

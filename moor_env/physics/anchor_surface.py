@@ -38,7 +38,7 @@ FEATURE_FRONT = 1
 FEATURE_BACK = 2
 FEATURE_RIM = 3
 
-@jit_step
+@jit_step(inline="always")
 def from_cog(px, py, pz, body_state):
     """The point relative to the anchor's COG, r = x - r_G [m], and its axial coordinate a = r . e [m]."""
     rx = px - body_state[BS_POS]
@@ -47,14 +47,14 @@ def from_cog(px, py, pz, body_state):
     return rx, ry, rz, rx * body_state[BS_AXIS] + ry * body_state[BS_AXIS + 1] + rz * body_state[BS_AXIS + 2]
 
 
-@jit_step
+@jit_step(inline="always")
 def radial_part(px, py, pz, body_state):
     """A point's axial coordinate a [m] and its radial vector from the anchor's axis, q = r - a e [m]."""
     rx, ry, rz, a = from_cog(px, py, pz, body_state)
     return a, rx - a * body_state[BS_AXIS], ry - a * body_state[BS_AXIS + 1], rz - a * body_state[BS_AXIS + 2]
 
 
-@jit_step
+@jit_step(inline="always")
 def _anchor_frame(px, py, pz, body_state):
     """Axial coordinate a, radius rho, radial unit vector u and axis e of a point in the anchor's frame."""
     ex = body_state[BS_AXIS]
@@ -73,7 +73,7 @@ def _anchor_frame(px, py, pz, body_state):
     return a, 0.0, qx / norm, qy / norm, qz / norm, ex, ey, ez
 
 
-@jit_step
+@jit_step(inline="always")
 def _end_depth(gap, inner, rho):
     """Depth below an end face ``gap`` [m] inside it (annulus from radius ``inner`` out); inside the annulus'
     inner radius the nearest point of the face is its inner rim. Returns (depth, e-part, u-part of the normal
@@ -85,7 +85,7 @@ def _end_depth(gap, inner, rho):
     return depth, gap / depth, dr / depth
 
 
-@jit_step
+@jit_step(inline="always")
 def surface_distance(px, py, pz, body_state, shape):
     """Signed distance of a point to the anchor's surface and its derivatives.
 
@@ -175,7 +175,7 @@ def surface_distance(px, py, pz, body_state, shape):
             feature)
 
 
-@jit_step
+@jit_step(inline="always")
 def bounding_radius_m(shape):
     """Radius of the sphere about the anchor's COG that holds every section's cylinder (the whole surface) [m]."""
     r2 = 0.0
@@ -184,7 +184,7 @@ def bounding_radius_m(shape):
     return math.sqrt(r2)
 
 
-@jit_step
+@jit_step(inline="always")
 def within_reach(px, py, pz, body_state, shape, margin_m=0.0):
     """Whether a point lies inside the cylinder that bounds the anchor, grown by ``margin_m`` [m] on every side
     (cheap test before the contact law)."""

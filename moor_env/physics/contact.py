@@ -65,7 +65,7 @@ from moor_env.physics.layout import (
 )
 
 
-@jit_step
+@jit_step(inline="always")
 def may_touch(node_pos, node_i, n, body_state, shape, seabed_z, margin_m=0.0):
     """Whether node n is one the contact acts on and lies within ``margin_m`` [m] of the anchor's bounding
     cylinder: a free node above the seabed (``seabed_z`` [m]; below it the anchor is in the soil, which strips a
@@ -76,7 +76,7 @@ def may_touch(node_pos, node_i, n, body_state, shape, seabed_z, margin_m=0.0):
 
 
 # features of the surface nearest to a point
-@jit_step
+@jit_step(inline="always")
 def relative_velocity(px, py, pz, vx, vy, vz, body_state):
     """Velocity of a point at p moving at v relative to the anchor's material point there,
     w = v - v_G - omega x (p - r_G) [m/s]."""
@@ -103,7 +103,7 @@ def _law(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f):
             st, normal, g, sliding, viscous_from_n)
 
 
-@jit_step
+@jit_step(inline="always")
 def law_at(depth, nx, ny, nz, wx, wy, wz, mass_kg, contact_f):
     """The contact law at a point ``depth`` [m] inside the surface (0: outside) with outward normal n and velocity
     w relative to the body's point there [m/s], for a mass ``mass_kg`` [kg] (module docstring): the force
@@ -151,7 +151,7 @@ def contact_force(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f)
     return force_within_reach(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f)
 
 
-@jit_step
+@jit_step(inline="always")
 def force_within_reach(px, py, pz, vx, vy, vz, mass_kg, body_state, shape, contact_f):
     """:func:`contact_force` of a node already found within the anchor's bounding cylinder
     (``anchor_surface.within_reach``): nothing but the surface distance computed for a node outside the surface."""
@@ -237,7 +237,7 @@ def _contact_jacobian(jac, nx, ny, nz, hxx, hyy, hzz, hxy, hxz, hyz, ox, oy, oz,
             jac[1, i, j] = av
 
 
-@jit_step
+@jit_step(inline="always")
 def _reaction_moment(body_state, px, py, pz, fx, fy, fz):
     """Moment about the COG of the reaction -F at the node: (x - r_G) x (-F)."""
     rx, ry, rz, _ = from_cog(px, py, pz, body_state)
@@ -257,7 +257,7 @@ def add_contact_reaction(load, body_state, px, py, pz, fx, fy, fz):
     load[5] += mz
 
 
-@jit_no_refcount
+@jit_no_refcount(inline="always")
 def add_contact_loads(node_pos, node_vel, node_i, node_mass, node_force, body_state, shape, contact_f, contact_out,
                       seabed_z, near_nodes, listed_on):
     """Add the contact force of every free node inside the anchor to ``node_force`` and record the nodes inside in

@@ -60,7 +60,7 @@ SKIN_M = 2.0  # how far beyond the anchor's bounding sphere the list reaches [m]
 ROUNDING_M = 1e-6  # the lists are rebuilt this much before the skin closes (positions are rounded at every step)
 
 
-@jit_no_refcount
+@jit_no_refcount(inline="always")
 def prepare_near(model, state, same_topology, dt):
     """Before a step of ``dt`` [s], its load evaluation: rebuild the lists where needed (not ``same_topology``, i.e.
     the first step of a call or after a payout; the skin closed, or would not hold the step's reach,
@@ -75,7 +75,7 @@ def prepare_near(model, state, same_topology, dt):
     skin[NEAR_ON] = 1.0
 
 
-@jit_no_refcount
+@jit_no_refcount(inline="always")
 def note_moved(state, dt, closing_m_s):
     """After a step of ``dt`` [s] in which no free node moved faster than ``closing_m_s`` [m/s] relative to the
     COG (their new velocities; the fastest node's speed plus the COG's bounds it): add how far they can have

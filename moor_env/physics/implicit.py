@@ -242,7 +242,7 @@ def couple_body(h, p, model, state):
             cb * (ez * pfx - ex * pfz), cb * (ex * pfy - ey * pfx))
 
 
-@jit_step
+@jit_no_refcount
 def implicit_euler_update(model, state, h, reuse_order):
     """Advance free nodes and the anchor by one linearly implicit step of ``h`` [s] (loads already evaluated at
     the start).

@@ -215,9 +215,10 @@ def _law_mode(mode):
 def any_law(contact_set, segment_set):
     """Whether the step's contact set (``state.contact_set``, ``state.segment_set``) gives any node or segment a
     law. Without one the step's contact terms and reaction are zero, and the integrator skips
-    :func:`assemble_contact` and :func:`contact_reaction`: a call that takes the records passes their every array
-    (about 0.1 us), and until a chain lands on the anchor no line touches it (about half the steps of the implicit
-    falls of the vertical-chain and gjoa-500 scenes)."""
+    :func:`assemble_contact` and :func:`contact_reaction`: each scans the candidates and calls the segments' pass,
+    a call that takes the records and so passes their every array (about 0.1 us), and until a chain lands on the
+    anchor no line touches it (about half the steps of the implicit falls of the vertical-chain and gjoa-500
+    scenes)."""
     if segment_set.shape[0] > 0 and segment_set[0] >= 0:
         return True
     for k in range(contact_set.shape[0]):
@@ -229,7 +230,7 @@ def any_law(contact_set, segment_set):
     return False
 
 
-@jit_no_refcount
+@jit_no_refcount(inline="always")
 def assemble_contact(h, model, state):
     """Add every candidate's contact terms (:func:`contact_terms`) to its block (``node_mm``) and right-hand side
     (``node_acc``), after the lines' assembly."""
@@ -256,7 +257,7 @@ def assemble_contact(h, model, state):
     _segment_pass(h, model, state, False)
 
 
-@jit_no_refcount
+@jit_no_refcount(inline="always")
 def contact_reaction(h, model, state):
     """Add to the anchor's load (``body_load``) the opposite of each node's contact force as the solve applied
     it beyond its start-of-step force (:func:`contact_force_change`), and record the step's net contact force

@@ -57,7 +57,7 @@ DEPTH_TOLERANCE_M = 1e-6  # a node must miss its predicted set by this much befo
 RESTING_GAP_M = 2e-3
 
 
-@jit_no_refcount
+@jit_no_refcount(inline="always")
 def init_contact_set(h, model, state):
     """Start of a step: the step's candidates, in node order, into ``state.contact_set`` (each as
     node << ``SET_BITS`` | its state, the list ended by -1 where shorter than the nodes): the free nodes above the
@@ -193,7 +193,7 @@ def _caught(h, model, state, n, depth, end, nx, ny, nz, wx, wy, wz):
     return normal > 0.0 and end + h * h * normal / max(mass, 1e-12) > DEPTH_TOLERANCE_M
 
 
-@jit_no_refcount
+@jit_no_refcount(inline="always")
 def update_contact_set(h, model, state):
     """After a solve (``node_acc`` = dv): candidates outside predicted inside at the end of the step enter the set,
     nodes inside predicted outside leave it, each once per step. Returns how many changed."""

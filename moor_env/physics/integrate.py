@@ -103,7 +103,7 @@ def _kick_drift_body(body_state, body_acc, body0, dt_v, dt_x, wx, wy, wz, dt_rot
     return v2
 
 
-@jit_step
+@jit_no_refcount
 def step(model, state, t, dt, integrator, same_topology):
     """One time step of length ``dt`` [s] from time ``t`` [s].
 

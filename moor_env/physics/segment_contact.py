@@ -95,8 +95,9 @@ def may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, body_radius
     midpoint within half its length of the sphere that holds the anchor (``body_radius_m`` [m] about its COG,
     ``anchor_surface.bounding_radius_m``), one of its nodes free and neither the anchor's own, both above the
     seabed (``seabed_z`` [m]: below it the anchor is in the soil), its nodes not both behind the back end or both
-    ahead of the tip, and its closest approach to the axis within the widest radius; each grown by ``margin_m``
-    [m] (0: cutting in now; more: able to within a step).
+    ahead of the tip, and its closest approach to the axis within the widest radius, each grown by ``margin_m``
+    [m] (0: cutting in now; more: able to within a step); and not both nodes where the back face is the nearest
+    surface (:func:`_on_the_back_face`).
 
     Why not a segment from the anchor's own node (the padeye at the back end's centre): hinged there, it cannot
     lie along the back face and over the rim as the chain does, and once turned past the rim it cuts the corner by
@@ -119,6 +120,8 @@ def may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, body_radius
     front = shape[0, CS_FRONT] + margin_m
     if (aa <= back and ab <= back) or (aa >= front and ab >= front):
         return False
+    if _on_the_back_face(aa, qax, qay, qaz, ab, qbx, qby, qbz, shape):  # the chain piled on the back end: cheap
+        return False
     # the segment's closest approach to the axis, min |q_a + t (q_b - q_a)| over [0, 1], against the widest radius
     q1x = qbx - qax
     q1y = qby - qay
@@ -129,12 +132,10 @@ def may_cut(node_pos, node_i, seg_i, s, body_state, shape, seabed_z, body_radius
     for i in range(shape.shape[0]):
         widest = max(widest, shape[i, CS_RADIUS])
     reach = widest + margin_m
-    if (qax + t * q1x) ** 2 + (qay + t * q1y) ** 2 + (qaz + t * q1z) ** 2 > reach * reach:
-        return False
-    return not _on_the_back_face(aa, qax, qay, qaz, ab, qbx, qby, qbz, shape)
+    return (qax + t * q1x) ** 2 + (qay + t * q1y) ** 2 + (qaz + t * q1z) ** 2 <= reach * reach
 
 
-@jit_step
+@jit_step(inline="always")
 def _on_the_back_face(aa, qax, qay, qaz, ab, qbx, qby, qbz, shape):
     """Whether a segment of a one-cylinder anchor has both nodes (axial coordinates aa, ab; radial vectors q)
     where the back face is the nearest surface: within the radius and nearer the back face than the shaft and the
@@ -147,8 +148,10 @@ def _on_the_back_face(aa, qax, qay, qaz, ab, qbx, qby, qbz, shape):
     front = shape[0, CS_FRONT]
     radius = shape[0, CS_RADIUS]
     for a, qx, qy, qz in ((aa, qax, qay, qaz), (ab, qbx, qby, qbz)):
-        rho = math.sqrt(qx * qx + qy * qy + qz * qz)
-        if rho > radius or a - back > radius - rho or a - back > front - a:
+        rho2 = qx * qx + qy * qy + qz * qz
+        gap = a - back
+        # rho > radius, or gap > radius - rho (nearer the shaft), without the square root
+        if rho2 > radius * radius or gap > radius or rho2 > (radius - gap) ** 2 or gap > front - a:
             return False
     return True
 
@@ -299,7 +302,7 @@ def segment_contact(node_pos, node_vel, node_i, node_mass, a, b, body_state, sha
     return e, fx, fy, fz, px, py, pz, nx, ny, nz, wx, wy, wz, mass, t, wa, wb, node_inside
 
 
-@jit_no_refcount
+@jit_no_refcount(inline="always")
 def add_segment_contact_loads(node_pos, node_vel, node_i, node_mass, seg_i, node_force, body_state, shape,
                               contact_f, seabed_z, contact_out, near_segs, listed_on):
     """Add every segment contact's force (module docstring) to its nodes' ``node_force`` (shares 1 - t and t, to
