@@ -201,7 +201,7 @@ def test_coarse_start_solves_the_fine_lines():
 
 
 def test_coarse_start_refuses_a_fibre_the_coarse_lines_lay_on_the_seabed(monkeypatch):
-    """Where the coarse compile's equilibrium lays the fibre rope on the seabed (here one node, 0.08 mm into it) and
+    """Where the coarse compile's equilibrium lays the fibre rope on the seabed (here one node) and
     the fine lines do not converge from it, the coarse start keeps the refusal with that cause and key for after the
     next start (``pending``, None returned); with ``REFUSED_FROM_NODES`` nodes or more it raises it at once
     (NoEquilibrium) instead of returning None (which would go on to a last full solve); where the fine lines
@@ -210,7 +210,9 @@ def test_coarse_start_refuses_a_fibre_the_coarse_lines_lay_on_the_seabed(monkeyp
     from moor_env import coarse_start as coarse_module
     from moor_env.errors import NoEquilibrium, StaticsNotConverged
 
-    long_line = {"mooring_line_length_m": 700.0, "vessel_spacing_m": 60.0, "current_scale": 0.0}
+    # which start converges on such a scene depends on the solver's stages and the last digits of the solve, so a
+    # change of either can call for another line length or spacing where the fine lines converge
+    long_line = {"mooring_line_length_m": 702.0, "vessel_spacing_m": 57.0, "current_scale": 0.0}
     with pytest.raises(NoEquilibrium):  # the reference: the scene itself is refused for its fibre
         solve_statics(load_scene("gjoa-500", long_line), progress=False, method="newton")
     sim = Simulator(compile_scene(load_scene("gjoa-500", long_line)))
