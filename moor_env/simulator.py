@@ -239,7 +239,8 @@ class Simulator:
         s = self.model.body_f[L.BF_S_TIP]
         e = b[L.BS_AXIS: L.BS_AXIS + 3]
         w = b[L.BS_OMEGA: L.BS_OMEGA + 3]
-        return b[L.BS_POS: L.BS_POS + 3] + s * e, b[L.BS_VEL: L.BS_VEL + 3] + s * np.cross(w, e)
+        w_x_e = np.array([w[1] * e[2] - w[2] * e[1], w[2] * e[0] - w[0] * e[2], w[0] * e[1] - w[1] * e[0]])
+        return b[L.BS_POS: L.BS_POS + 3] + s * e, b[L.BS_VEL: L.BS_VEL + 3] + s * w_x_e
 
     def back_end_m(self) -> np.ndarray:
         """Centre of the anchor's back end (the tip minus its length along the axis) [m]."""

@@ -347,19 +347,27 @@ def test_scene_whose_current_takes_long_increments_is_refused_without_the_fallba
 def test_first_try_from_the_guess_made_before_it_is_the_solve_from_the_guess():
     """``solve_statics`` makes the first guess itself (to look at the fibre) and starts the first Newton try from
     it without a new guess; reference: the solve that makes its own guess, on a scene in current with the loop
-    resting on the anchor (the contact solve restarts from the start state). Iterations and node positions agree
-    bit for bit."""
+    resting on the anchor (the contact solve restarts from the start state). Iterations (or, where Newton's method
+    stops short of the tolerance, the failure's message: iterations and residual) and node positions agree bit for
+    bit. Whether this scene converges within the iterations depends on the last digits of the solve (the
+    linear-algebra libraries' among them); that the two starts take the same path does not."""
     from moor_env import Simulator, compile_scene
+    from moor_env.errors import StaticsNotConverged
     from moor_env.physics.statics import solve_equilibrium
     from moor_env.physics.statics_guess import first_guess
 
+    def outcome(sim, **options):
+        try:
+            return solve_equilibrium(sim, progress=False, method="newton", **options).iterations
+        except StaticsNotConverged as exc:
+            return str(exc)
+
     model = compile_scene(load_scene("gjoa-500", LOOP_ON_ANCHOR_IN_CURRENT))
     own = Simulator(model)
-    own_report = solve_equilibrium(own, progress=False, method="newton")
+    own_outcome = outcome(own)
     given = Simulator(model)
     first_guess(given)
-    given_report = solve_equilibrium(given, progress=False, method="newton", analytic_guess=False)
-    assert given_report.iterations == own_report.iterations
+    assert outcome(given, analytic_guess=False) == own_outcome
     assert np.array_equal(given.state.node_pos, own.state.node_pos)
     assert np.array_equal(given.state.body_state, own.state.body_state)
 

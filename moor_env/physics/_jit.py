@@ -65,7 +65,12 @@ jit_step = functools.partial(jit, error_model="numpy")
 # ``implicit.implicit_euler_update``). numba increments and decrements the reference count of every array argument
 # it unpacks on each call, an atomic operation each, and a record holds about thirty arrays: on the vertical chain
 # that was about a tenth of an explicit step. Such a kernel may not allocate (numba refuses to compile it) nor keep
-# an array beyond the call.
+# an array beyond the call. The static solver's passes over the nodes and segments (its residual, assembly,
+# elimination and contact terms) are such kernels too: without the counts, and with the assembly writing each
+# segment's blocks once, a step's linear solve on gjoa-500 takes 28 % less time (default and accurate presets).
+# A kernel without reference counting compiles the reference-counted kernels it calls without them as well, so
+# the kernels that allocate (the Newton kernel, the anchor's 5x5 solve) and those that lead to them (the step's
+# solve, the elimination) stay reference counted and call the passes.
 #
 # Calls cost too: numba passes an array as its seven to nine fields, so a call that LLVM does not inline passes
 # tens of arguments, and a call that takes the records about three hundred. The line-anchor contact's helpers

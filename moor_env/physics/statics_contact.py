@@ -45,7 +45,7 @@ from __future__ import annotations
 import math
 
 from moor_env.physics import layout as L
-from moor_env.physics._jit import jit_step
+from moor_env.physics._jit import jit_no_refcount
 from moor_env.physics.anchor_surface import FEATURE_SHAFT, bounding_radius_m, from_cog, surface_distance
 from moor_env.physics.contact import may_touch
 from moor_env.physics.segment_contact import free_shares, may_cut, segment_geometry
@@ -65,7 +65,7 @@ G_DT = 11  # and how its deepest point moves along it, dt/dx_a (3), dt/dx_b (3) 
 N_GEO = 17
 
 
-@jit_step
+@jit_no_refcount
 def _jn(basis, rx, ry, rz, nx, ny, nz, geo, n):
     """J^T n of a material point at r from the COG: the normal's translation part, then basis[k] . (r x n)."""
     geo[n, G_JN] = nx
@@ -78,7 +78,7 @@ def _jn(basis, rx, ry, rz, nx, ny, nz, geo, n):
         geo[n, G_JN + 3 + k] = basis[k, 0] * cx + basis[k, 1] * cy + basis[k, 2] * cz
 
 
-@jit_step
+@jit_no_refcount
 def contact_geometry(basis, model, state, geo, cand, cin):
     """Depth, normal and J^T n of every free node near the anchor (``cand`` 1) at the present state; ``cin`` 1
     where it is inside now: the nodes the contact acts on (``contact.may_touch``); then the segment contacts' rows
@@ -110,7 +110,7 @@ def contact_geometry(basis, model, state, geo, cand, cin):
     return count + _segment_geometry(basis, model, state, geo, cand, cin)
 
 
-@jit_step
+@jit_no_refcount
 def _segment_geometry(basis, model, state, geo, cand, cin):
     """The rows of the segment contacts (after the nodes' rows, where ``geo`` has them): excess, normal and J^T n
     at the deepest point, node a's share; candidates where the excess is positive (inside), or where both nodes
@@ -160,7 +160,7 @@ def _segment_geometry(basis, model, state, geo, cand, cin):
     return count
 
 
-@jit_step
+@jit_no_refcount
 def _add_normal_force(force_n, geo, n, rhs, body_r):
     """A force ``force_n`` [N] along candidate n's normal into its right-hand side, its reaction into the
     anchor's (-force J^T n)."""
@@ -170,7 +170,7 @@ def _add_normal_force(force_n, geo, n, rhs, body_r):
         body_r[i] -= force_n * geo[n, G_JN + i]
 
 
-@jit_step
+@jit_no_refcount
 def add_contact_blocks(model, state, geo, cand, cin, dmat, coupling, bmat, cmat, coupled, body_a, body_r):
     """The contact's terms of the step (module docstring): node blocks into ``dmat``, a segment contact's coupling
     of its two nodes into the segment's ``coupling``, the couplings into ``bmat`` (node-anchor, 3x5) and ``cmat``
@@ -212,7 +212,7 @@ def add_contact_blocks(model, state, geo, cand, cin, dmat, coupling, bmat, cmat,
             _add_segment_blocks(k, state, geo, cin, r, dmat, coupling, bmat, cmat, coupled, body_a, body_r)
 
 
-@jit_step
+@jit_no_refcount
 def _add_segment_blocks(k, state, geo, cin, r, dmat, coupling, bmat, cmat, coupled, body_a, body_r):
     """Segment contact row r's terms (``physics/segment_contact.py``: k g g^T, g = ((1 - t) n, t n, -J^T n)):
     its free nodes' blocks, their coupling in the segment's block, their couplings to the anchor, the anchor's
@@ -252,7 +252,7 @@ def _add_segment_blocks(k, state, geo, cin, r, dmat, coupling, bmat, cmat, coupl
             body_a[i, j] += k * geo[r, G_JN + i] * geo[r, G_JN + j]
 
 
-@jit_step
+@jit_no_refcount
 def _add_share_transfer(force_n, geo, r, s, a, wa, b, wb, dmat, coupling):
     """The change of segment contact row r's shares as its deepest point moves along it: node a takes (1 - t) F,
     node b t F (F = ``force_n`` n), so K_aj += F (dt/dx_j)^T and K_bj -= F (dt/dx_j)^T (K = -dF/dx; j = a, b,
@@ -271,7 +271,7 @@ def _add_share_transfer(force_n, geo, r, s, a, wa, b, wb, dmat, coupling):
                 coupling[s, 1, i, j] -= ua
 
 
-@jit_step
+@jit_no_refcount
 def _add_segment_force(force_n, geo, r, rhs, a, wa, b, wb, body_r):
     """A force ``force_n`` [N] along segment contact row r's normal at its deepest point: its free nodes' shares
     into their right-hand sides, its reaction into the anchor's (-force J^T n)."""
@@ -282,7 +282,7 @@ def _add_segment_force(force_n, geo, r, rhs, a, wa, b, wb, body_r):
         body_r[i] -= force_n * geo[r, G_JN + i]
 
 
-@jit_step
+@jit_no_refcount
 def _segment_nodes(state, geo, r):
     """The nodes of segment contact row r and their shares of its force (zero where not free)."""
     s = r - state.node_pos.shape[0]
@@ -292,7 +292,7 @@ def _segment_nodes(state, geo, r):
     return a, b, wa, wb
 
 
-@jit_step
+@jit_no_refcount
 def pass_on_eliminated(c, inv, state, bmat, cmat, body_a, body_r):
     """Node c just eliminated (``inv`` = D_c^-1, ``state.node_acc[c]`` = D_c^-1 r_c): the anchor's rows take
     -C_c D_c^-1 (B_c, r_c); ``bmat[c]`` becomes D_c^-1 B_c (for the back substitution) and ``cmat[c]`` C_c D_c^-1
@@ -320,7 +320,7 @@ def pass_on_eliminated(c, inv, state, bmat, cmat, body_a, body_r):
         cmat[c, i, 2] = c2
 
 
-@jit_step
+@jit_no_refcount
 def pass_on_parent(c, p, k_pc, k_cp, bmat, cmat, coupled):
     """The parent p of an eliminated, coupled node c takes its coupling: B_p -= K_pc D_c^-1 B_c, C_p -= C_c D_c^-1
     K_cp (``bmat[c]``, ``cmat[c]`` as :func:`pass_on_eliminated` left them)."""
@@ -333,7 +333,7 @@ def pass_on_parent(c, p, k_pc, k_cp, bmat, cmat, coupled):
     coupled[p] = 1
 
 
-@jit_step
+@jit_no_refcount
 def predict_contact(state, dq, geo, cand, cin, release):
     """Update the nodes predicted inside the anchor after the step (nodes in ``state.node_acc``, the anchor in
     ``dq``); returns how many changed. With ``release`` False a node in contact stays in (no cycling)."""
@@ -361,7 +361,7 @@ def predict_contact(state, dq, geo, cand, cin, release):
     return changed
 
 
-@jit_step
+@jit_no_refcount
 def slide_plan(basis, model, state, dq, geo, cand, cin, plan):
     """Where the lines rest on the anchor (no node deeper than ``SLIDE_DEPTH_M`` inside it), for every node on the
     shaft that the step (``state.node_acc``, ``dq``) predicts inside: its depth now and its predicted change of
@@ -399,7 +399,7 @@ def slide_plan(basis, model, state, dq, geo, cand, cin, plan):
     return count
 
 
-@jit_step
+@jit_no_refcount
 def slide_on_surface(node_pos, n, body_state, shape, depth_m):
     """Move node n along the anchor's normal to the depth ``depth_m`` [m] (the anchor at its new place), where it
     still lies nearest the shaft.

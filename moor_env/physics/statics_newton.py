@@ -34,7 +34,7 @@ import math
 import numpy as np
 
 from moor_env.physics import layout as L
-from moor_env.physics._jit import jit_step
+from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.anchor import rotate_axis
 from moor_env.physics.statics_contact import N_GEO, slide_on_surface, slide_plan
 from moor_env.physics.statics_system import count_slack, new_scratch, residual, solve_step, step_size
@@ -73,7 +73,7 @@ STATUS_CONVERGED = 1
 STATUS_NONFINITE = 2
 
 
-@jit_step
+@jit_no_refcount
 def _apply(scale, nq, body_node, basis, dq, model, state, axis0, saved, tree, orow, plan, planned):
     """x += scale * dx for the anchor, and for every free node along the tree from its root: each node is placed
     from its (already moved) parent along the segment's new direction at its linearly predicted length; a node

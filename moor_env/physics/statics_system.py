@@ -32,7 +32,7 @@ import math
 import numpy as np
 
 from moor_env.physics import layout as L
-from moor_env.physics._jit import jit_step
+from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.environment import current_velocity
 from moor_env.physics.hydro import slender_drag_turn
 from moor_env.physics.linalg3 import inverse3
@@ -54,7 +54,7 @@ SLACK_PATIENCE = 3  # iterations a segment is slack before K lets it go
 ACTIVE_SET_ROUNDS = 8  # solves per step at most while the predicted seabed contacts change
 
 
-@jit_step
+@jit_no_refcount
 def _basis(body_state, basis):
     """Two unit vectors perpendicular to the anchor axis (the tilt unknowns rotate about them)."""
     ex = body_state[L.BS_AXIS]
@@ -73,7 +73,7 @@ def _basis(body_state, basis):
     basis[1, 2] = ex * basis[0, 1] - ey * basis[0, 0]
 
 
-@jit_step
+@jit_no_refcount
 def residual(model, state, body_node, basis, res_body):
     """Loads at the current state (velocities zero); returns (sum of squared scaled residuals, largest one) and
     the anchor's five generalised residuals in ``res_body``.
@@ -116,7 +116,7 @@ def residual(model, state, body_node, basis, res_body):
     return norm2, worst
 
 
-@jit_step
+@jit_no_refcount(inline="always")
 def _add_block(dmat, n, sign, m):
     """dmat[n] += sign * m (3x3)."""
     for i in range(3):
@@ -124,11 +124,11 @@ def _add_block(dmat, n, sign, m):
             dmat[n, i, j] += sign * m[i, j]
 
 
-@jit_step
-def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling, orow):
+@jit_no_refcount
+def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling, orow, kmat):
     """Diagonal blocks D / tau^2 + K (``dmat``), the couplings of every segment's two ends (``coupling[s, 0]`` =
     K_ab, ``coupling[s, 1]`` = K_ba) and the right-hand side F + G (``state.node_acc``); ``taut``: segments that K
-    holds taut, ``node_down``: nodes on the seabed at the end of the step."""
+    holds taut, ``node_down``: nodes on the seabed at the end of the step, ``kmat``: a 3x3 scratch block."""
     node_pos = state.node_pos
     seg_i = state.seg_i
     seg_f = state.seg_f
@@ -164,16 +164,15 @@ def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling
             rhs[e, 2] -= k * penetration  # lifts off: the seabed lets go
     smoothing = env_f[L.EF_SLACK_SMOOTHING]
     rho = env_f[L.EF_RHO]
-    kmat = np.empty((3, 3))
+    current = env_f[L.EF_CUR_SCALE] != 0.0
+    profile = model.current_profile
     for s in range(seg_i.shape[0]):
-        coupling[s, :, :, :] = 0.0
-        if seg_i[s, L.SI_ACTIVE] == 0:
-            continue
         a = seg_i[s, L.SI_A]
         b = seg_i[s, L.SI_B]
         ea = orow[a, OR_EFF]
         eb = orow[b, OR_EFF]
-        if ea == eb:
+        if seg_i[s, L.SI_ACTIVE] == 0 or ea == eb:
+            coupling[s, :, :, :] = 0.0
             continue
         mat = seg_i[s, L.SI_MAT]
         ea_n = mat_f[mat, L.MF_EA]
@@ -191,20 +190,20 @@ def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling
                 kt = max(kt, floor)
         for i in range(3):
             for j in range(3):
-                kmat[i, j] = (kq - kt) * q[i] * q[j] + (kt if i == j else 0.0)
-        if ea >= 0:
-            _add_block(dmat, ea, 1.0, kmat)
-        if eb >= 0:
-            _add_block(dmat, eb, 1.0, kmat)
-        _add_block(coupling[s], 0, -1.0, kmat)
-        _add_block(coupling[s], 1, -1.0, kmat)
+                k = (kq - kt) * q[i] * q[j] + (kt if i == j else 0.0)
+                if ea >= 0:
+                    dmat[ea, i, j] += k
+                if eb >= 0:
+                    dmat[eb, i, j] += k
+                coupling[s, 0, i, j] = -k
+                coupling[s, 1, i, j] = -k
         # current drag turns with the segment: d f_end / d x_b = D_end P / length, d / d x_a = -D_end P / length
-        if env_f[L.EF_CUR_SCALE] == 0.0 or length <= 0.0:
+        if not current or length <= 0.0:
             continue
         cn, ct, _, _ = half_segment_morison(mat_f, mat, l0, rho)
         for end in range(2):
             node = a if end == 0 else b
-            ux, uy, uz = current_velocity(node_pos[node, 2], env_f, model.current_profile)
+            ux, uy, uz = current_velocity(node_pos[node, 2], env_f, profile)
             slender_drag_turn(ux, uy, uz, qx, qy, qz, cn / length, ct / length, kmat)
             # K = -dF/dx: this end's row gets +D P / l from x_a and -D P / l from x_b
             if end == 0:
@@ -256,16 +255,35 @@ def _solve_body(inv_tau2, p, basis, res_body, model, state, smat, rho_p, dq, con
 
 @jit_step
 def eliminate(inv_tau2, nq, body_node, basis, res_body, dq, model, state, dmat, coupling, tree, orow, contact,
-              bmat, cmat, coupled, body_a, body_r):
+              bmat, cmat, coupled, body_a, body_r, blocks):
     """Solve the assembled system in place: ``state.node_acc`` holds the right-hand side in and the step out (the
     anchor's in ``dq``), by block elimination over the tree, leaves first (x_c = D_c^-1 (r_c - K_cp x_p) once the
     parent p is known). With ``contact``, nodes coupled to the anchor outside the tree carry their coupling along
-    (``physics/statics_contact.py``). The 3x3 products are written out: numpy's would allocate for every node."""
+    (``physics/statics_contact.py``). ``blocks``: scratch (4, 3, 3).
+
+    The passes over the nodes take no reference counts (``_jit.jit_no_refcount``): in a reference-counted kernel
+    every 3x3 block view pays atomics, which cost more than the block's arithmetic. Only the anchor's 5x5 solve
+    allocates."""
+    _eliminate_leaves(nq, state, dmat, coupling, tree, orow, contact, bmat, cmat, coupled, body_a, body_r, blocks)
+    if body_node >= 0:
+        rho_p = blocks[3, 1]
+        rho_p[:] = state.node_acc[body_node]
+        _solve_body(inv_tau2, body_node, basis, res_body, model, state, dmat[body_node], rho_p, dq, contact, bmat,
+                    cmat, body_a, body_r)
+        state.node_acc[body_node, :] = rho_p
+    _substitute_back(nq, dq, state, dmat, coupling, tree, orow, contact, bmat, coupled, blocks[3, 0])
+
+
+@jit_no_refcount
+def _eliminate_leaves(nq, state, dmat, coupling, tree, orow, contact, bmat, cmat, coupled, body_a, body_r, blocks):
+    """:func:`eliminate`'s pass from the leaves to the root: each node's block inverted into ``dmat``, its
+    right-hand side solved in ``state.node_acc``, both passed on to its parent. The 3x3 products are written out:
+    numpy's would allocate for every node."""
     seg_i = state.seg_i
     node_acc = state.node_acc
-    inv = np.empty((3, 3))
-    kpc_inv = np.empty((3, 3))
-    r = np.empty(3)
+    inv = blocks[1]
+    kpc_inv = blocks[2]
+    r = blocks[3, 0]
     for k in range(nq):
         c = orow[k, OR_ORDER]
         inverse3(dmat[c], inv)
@@ -296,11 +314,14 @@ def eliminate(inv_tau2, nq, body_node, basis, res_body, dq, model, state, dmat, 
                                   + kpc_inv[i, 2] * coupling[s, cp, 2, j])
             node_acc[p, i] -= (coupling[s, pc, i, 0] * node_acc[c, 0] + coupling[s, pc, i, 1] * node_acc[c, 1]
                                + coupling[s, pc, i, 2] * node_acc[c, 2])
-    if body_node >= 0:
-        rho_p = node_acc[body_node].copy()
-        _solve_body(inv_tau2, body_node, basis, res_body, model, state, dmat[body_node], rho_p, dq, contact, bmat,
-                    cmat, body_a, body_r)
-        node_acc[body_node, :] = rho_p
+
+
+@jit_no_refcount
+def _substitute_back(nq, dq, state, dmat, coupling, tree, orow, contact, bmat, coupled, r):
+    """:func:`eliminate`'s pass from the root to the leaves: x_c = D_c^-1 r_c - D_c^-1 K_cp x_p (less the
+    anchor's coupling), the parent's step known. ``r``: scratch (3)."""
+    seg_i = state.seg_i
+    node_acc = state.node_acc
     for k in range(nq - 1, -1, -1):
         c = orow[k, OR_ORDER]
         if contact and coupled[c] != 0:  # x_c -= D_c^-1 B_c dq
@@ -319,7 +340,7 @@ def eliminate(inv_tau2, nq, body_node, basis, res_body, dq, model, state, dmat, 
             node_acc[c, i] -= dmat[c, i, 0] * r[0] + dmat[c, i, 1] * r[1] + dmat[c, i, 2] * r[2]
 
 
-@jit_step
+@jit_no_refcount
 def _predict_seabed(body_node, state, seabed, node_down, orow, release):
     """Update the nodes predicted on the seabed after the step in ``state.node_acc``; returns how many changed.
     With ``release`` False a node on the seabed stays there (the set only grows: no cycling)."""
@@ -338,12 +359,9 @@ def _predict_seabed(body_node, state, seabed, node_down, orow, release):
     return changed
 
 
-@jit_step
-def solve_step(inv_tau2, nq, body_node, basis, res_body, dq, model, state, scratch, tree, orow, seg_age):
-    """The step at the present state (its loads evaluated) into ``state.node_acc`` (free nodes) and ``dq`` (the
-    anchor), solved again while the contacts it predicts change; returns the number of solves. ``scratch``: the
-    arrays of :func:`new_scratch`."""
-    dmat, coupling, taut, node_down, geo, cand, cin, bmat, cmat, coupled, body_a, body_r = scratch
+@jit_no_refcount
+def _start_sets(model, state, seg_age, taut, node_down):
+    """The segments K holds taut and the nodes on the seabed at the present state."""
     node_pos = state.node_pos
     seg_i = state.seg_i
     seg_f = state.seg_f
@@ -353,15 +371,25 @@ def solve_step(inv_tau2, nq, body_node, basis, res_body, dq, model, state, scrat
         taut[s] = 1 if length > seg_f[s, L.SF_L0] or seg_age[s] < SLACK_PATIENCE else 0
     for n in range(node_pos.shape[0]):
         node_down[n] = 1 if node_pos[n, 2] <= seabed else 0
+
+
+@jit_step
+def solve_step(inv_tau2, nq, body_node, basis, res_body, dq, model, state, scratch, tree, orow, seg_age):
+    """The step at the present state (its loads evaluated) into ``state.node_acc`` (free nodes) and ``dq`` (the
+    anchor), solved again while the contacts it predicts change; returns the number of solves. ``scratch``: the
+    arrays of :func:`new_scratch`."""
+    dmat, coupling, taut, node_down, geo, cand, cin, bmat, cmat, coupled, body_a, body_r, blocks = scratch
+    seabed = -model.env_f[L.EF_DEPTH]
+    _start_sets(model, state, seg_age, taut, node_down)
     contact = (body_node >= 0 and model.contact_f[L.CF_ON] != 0.0
                and contact_geometry(basis, model, state, geo, cand, cin) > 0)
     solves = 0
     while True:
-        _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling, orow)
+        _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling, orow, blocks[0])
         if contact:
             add_contact_blocks(model, state, geo, cand, cin, dmat, coupling, bmat, cmat, coupled, body_a, body_r)
         eliminate(inv_tau2, nq, body_node, basis, res_body, dq, model, state, dmat, coupling, tree, orow, contact,
-                  bmat, cmat, coupled, body_a, body_r)
+                  bmat, cmat, coupled, body_a, body_r, blocks)
         solves += 1
         if solves >= ACTIVE_SET_ROUNDS:
             return solves
@@ -372,7 +400,7 @@ def solve_step(inv_tau2, nq, body_node, basis, res_body, dq, model, state, scrat
             return solves
 
 
-@jit_step
+@jit_no_refcount
 def step_size(body_node, model, state, dq):
     """Largest node move of a step [m] (the anchor's rotation counted at its length): the free nodes' in
     ``state.node_acc``, the anchor's in ``dq``."""
@@ -392,7 +420,7 @@ def step_size(body_node, model, state, dq):
     return biggest
 
 
-@jit_step
+@jit_no_refcount
 def count_slack(state, seg_age):
     """Count the iterations each segment has been slack (0 while taut)."""
     node_pos = state.node_pos
@@ -410,8 +438,8 @@ def new_scratch(n_nodes, n_segs):
     """Scratch arrays of :func:`solve_step`: diagonal blocks, segment couplings, segments K holds taut, nodes on the
     seabed after the step; the line-anchor contact's (``physics/statics_contact.py``): candidates' geometry,
     candidates, candidates inside after the step (a row per node, then one per segment), node-anchor and
-    anchor-node couplings, coupled nodes, the anchor's block and right-hand side."""
+    anchor-node couplings, coupled nodes, the anchor's block and right-hand side; the elimination's 3x3 blocks."""
     return (np.zeros((n_nodes, 3, 3)), np.zeros((n_segs, 2, 3, 3)), np.zeros(n_segs, np.int64),
             np.zeros(n_nodes, np.int64), np.zeros((n_nodes + n_segs, N_GEO)), np.zeros(n_nodes + n_segs, np.int64),
             np.zeros(n_nodes + n_segs, np.int64), np.zeros((n_nodes, 3, 5)), np.zeros((n_nodes, 5, 3)),
-            np.zeros(n_nodes, np.int64), np.zeros((5, 5)), np.zeros(5))
+            np.zeros(n_nodes, np.int64), np.zeros((5, 5)), np.zeros(5), np.zeros((4, 3, 3)))

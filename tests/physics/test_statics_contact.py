@@ -130,16 +130,17 @@ def test_newton_step_predicts_the_residual_change(segments):
         return state.node_force[free].copy()
 
     f0 = line_loads()
-    dmat, coupling, taut, node_down, geo, cand, cin, bmat, cmat, coupled, body_a, body_r = system.new_scratch(nn, ns)
+    (dmat, coupling, taut, node_down, geo, cand, cin, bmat, cmat, coupled, body_a, body_r,
+     blocks) = system.new_scratch(nn, ns)
     seg = sim.state.seg_i
     length = np.linalg.norm(sim.state.node_pos[seg[:, L.SI_B]] - sim.state.node_pos[seg[:, L.SI_A]], axis=1)
     taut[:] = (length > sim.state.seg_f[:, L.SF_L0]) | (slack_counts(sim.state, False) < system.SLACK_PATIENCE)
     node_down[:] = sim.state.node_pos[:, 2] <= -sim.env_f[L.EF_DEPTH]
     assert contact_geometry(basis, model, state, geo, cand, cin) > 0 and cin[row] == 1
-    system._assemble(1e-24, body, model, state, taut, node_down, dmat, coupling, orow)
+    system._assemble(1e-24, body, model, state, taut, node_down, dmat, coupling, orow, blocks[0])
     add_contact_blocks(model, state, geo, cand, cin, dmat, coupling, bmat, cmat, coupled, body_a, body_r)
     system.eliminate(1e-24, nq, body, basis, res_body, dq, model, state, dmat, coupling, tree, orow, True, bmat,
-                     cmat, coupled, body_a, body_r)
+                     cmat, coupled, body_a, body_r, blocks)
     assert np.abs(f0).max() > 1e5  # the push loads the line
     eps = 1e-3
     plan = np.zeros((nn, 2))
