@@ -165,6 +165,8 @@ def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling
     rho = env_f[L.EF_RHO]
     current = env_f[L.EF_CUR_SCALE] != 0.0
     profile = model.current_profile
+    last_node = -1  # the end b of the last segment whose drag turned, and its current velocity
+    last_u = (0.0, 0.0, 0.0)
     for s in range(seg_i.shape[0]):
         a = seg_i[s, L.SI_A]
         b = seg_i[s, L.SI_B]
@@ -202,7 +204,13 @@ def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling
         cn, ct, _, _ = half_segment_morison(mat_f, mat, l0, rho)
         for end in range(2):
             node = a if end == 0 else b
-            ux, uy, uz = current_velocity(node_pos[node, 2], env_f, profile)
+            if node == last_node:  # a line's segments run on: its end b is the next one's end a
+                ux, uy, uz = last_u
+            else:
+                ux, uy, uz = current_velocity(node_pos[node, 2], env_f, profile)
+            if end == 1:
+                last_node = node
+                last_u = (ux, uy, uz)
             slender_drag_turn(ux, uy, uz, qx, qy, qz, cn / length, ct / length, kmat)
             # K = -dF/dx: this end's row gets +D P / l from x_a and -D P / l from x_b
             if end == 0:
