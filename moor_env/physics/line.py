@@ -150,6 +150,8 @@ def segment_loads(node_pos, node_vel, seg_i, seg_f, mat_f, line_f, env_f, curren
     smoothing = env_f[EF_SLACK_SMOOTHING]
     max_strain = 0.0
     worst = -1
+    last_node = -1  # the end b of the last segment, and the current velocity there
+    last_u = (0.0, 0.0, 0.0)
     for s in range(seg_i.shape[0]):
         if seg_i[s, SI_ACTIVE] == 0:
             continue
@@ -186,7 +188,13 @@ def segment_loads(node_pos, node_vel, seg_i, seg_f, mat_f, line_f, env_f, curren
         for end in range(2):
             n = a if end == 0 else b
             sign = 1.0 if end == 0 else -1.0
-            ux, uy, uz = current_velocity(node_pos[n, 2], env_f, current_profile)
+            if n == last_node:  # a line's segments run on: its end b is the next one's end a
+                ux, uy, uz = last_u
+            else:
+                ux, uy, uz = current_velocity(node_pos[n, 2], env_f, current_profile)
+            if end == 1:
+                last_node = n
+                last_u = (ux, uy, uz)
             fx, fy, fz = slender_drag(ux - node_vel[n, 0], uy - node_vel[n, 1], uz - node_vel[n, 2],
                                       qx, qy, qz, drag_n, drag_t)
             node_force[n, 0] += fx + sign * tension * qx
