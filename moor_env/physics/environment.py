@@ -36,3 +36,14 @@ def current_velocity(z, env_f, current_profile):
     """Current velocity vector (ux, uy, 0) at height ``z`` [m/s]."""
     u = current_speed(z, env_f, current_profile)
     return u * env_f[EF_CUR_DX], u * env_f[EF_CUR_DY], 0.0
+
+
+@jit
+def current_velocity_along(n, last_node, last_u, z, env_f, current_profile):
+    """Current velocity (ux, uy, uz) at node ``n`` of height ``z`` [m/s]: ``last_u`` where n is ``last_node``.
+
+    Why: a line's segments run on (the end b of one is the end a of the next), so a pass over the segments that
+    keeps the last end's velocity looks the profile up once per node instead of once per segment end."""
+    if n == last_node:
+        return last_u
+    return current_velocity(z, env_f, current_profile)

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 
 from moor_env.physics._jit import jit
-from moor_env.physics.environment import current_velocity
+from moor_env.physics.environment import current_velocity_along
 from moor_env.physics.hydro import add_slender_added_mass, slender_drag
 from moor_env.physics.layout import (
     EF_G,
@@ -188,13 +188,9 @@ def segment_loads(node_pos, node_vel, seg_i, seg_f, mat_f, line_f, env_f, curren
         for end in range(2):
             n = a if end == 0 else b
             sign = 1.0 if end == 0 else -1.0
-            if n == last_node:  # a line's segments run on: its end b is the next one's end a
-                ux, uy, uz = last_u
-            else:
-                ux, uy, uz = current_velocity(node_pos[n, 2], env_f, current_profile)
+            ux, uy, uz = current_velocity_along(n, last_node, last_u, node_pos[n, 2], env_f, current_profile)
             if end == 1:
-                last_node = n
-                last_u = (ux, uy, uz)
+                last_node, last_u = n, (ux, uy, uz)
             fx, fy, fz = slender_drag(ux - node_vel[n, 0], uy - node_vel[n, 1], uz - node_vel[n, 2],
                                       qx, qy, qz, drag_n, drag_t)
             node_force[n, 0] += fx + sign * tension * qx

@@ -34,7 +34,7 @@ import numpy as np
 
 from moor_env.physics import layout as L
 from moor_env.physics._jit import jit_no_refcount, jit_step
-from moor_env.physics.environment import current_velocity
+from moor_env.physics.environment import current_velocity_along
 from moor_env.physics.hydro import slender_drag_turn
 from moor_env.physics.line import half_segment_morison, segment_axis, smoothed_tension_slope_n
 from moor_env.physics.loads import compute_loads, set_constrained_nodes
@@ -165,7 +165,7 @@ def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling
     rho = env_f[L.EF_RHO]
     current = env_f[L.EF_CUR_SCALE] != 0.0
     profile = model.current_profile
-    last_node = -1  # the end b of the last segment whose drag turned, and its current velocity
+    last_node = -1  # the end b of the last segment whose drag turned, and the current velocity there
     last_u = (0.0, 0.0, 0.0)
     for s in range(seg_i.shape[0]):
         a = seg_i[s, L.SI_A]
@@ -204,13 +204,9 @@ def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling
         cn, ct, _, _ = half_segment_morison(mat_f, mat, l0, rho)
         for end in range(2):
             node = a if end == 0 else b
-            if node == last_node:  # a line's segments run on: its end b is the next one's end a
-                ux, uy, uz = last_u
-            else:
-                ux, uy, uz = current_velocity(node_pos[node, 2], env_f, profile)
+            ux, uy, uz = current_velocity_along(node, last_node, last_u, node_pos[node, 2], env_f, profile)
             if end == 1:
-                last_node = node
-                last_u = (ux, uy, uz)
+                last_node, last_u = node, (ux, uy, uz)
             slender_drag_turn(ux, uy, uz, qx, qy, qz, cn / length, ct / length, kmat)
             # K = -dF/dx: this end's row gets +D P / l from x_a and -D P / l from x_b
             if end == 0:
