@@ -4,10 +4,11 @@ The time distribution of ``benchmarks/statics.py`` has a long tail whose scenes 
 (docs/statics.md, "The slowest scenes"): a change may make most of them faster and a few far slower, or leave one
 unsolved. This benchmark solves the ``--slowest`` scenes of that benchmark's committed records (by their solve time)
 and the ``--median`` scenes nearest its median, with this tree and, with ``--baseline-root DIR``, with another copy
-of the package (a directory holding ``moor_env`` and ``configs``, e.g. ``mkdir baseline && git archive HEAD
-moor_env configs | tar -x -C baseline``). Each tree runs in a subprocess per chunk of scenes, the two alternating
-chunk by chunk (each first in every other chunk) so that both see the same machine load; one run's time ratio
-moves by a few percent with the machine's load. Per scene it records the outcome, the iterations, the
+of the package (a directory holding ``moor_env`` and ``configs``, e.g. ``mkdir baseline && git archive HEAD moor_env
+configs | tar -x -C baseline``). Each tree runs in a subprocess per chunk of scenes, the two alternating chunk by
+chunk (each first in every other chunk) so that both see the same machine load; even so one run's time ratio moves
+with the machine's load (on a shared 2-core machine, repeated runs of one comparison spread over about 0.95-1.01),
+so a change of a few percent in time needs several runs. Per scene it records the outcome, the iterations, the
 release point and top tensions (to tell results equal bit for bit from results changed) and the CPU time from the
 compiled scene to the result (``time.process_time``, one core, kernels compiled beforehand; a converged scene is
 solved twice, seven times where it takes under 0.1 s, and the least time counts: a rare path's kernel compiles on
