@@ -16,15 +16,16 @@ scenes, and a one-scene call with nothing to integrate costs 16 us, most of it t
 in use, checks dtype, rank and C layout when it builds an entry, and rebuilds the entry when the simulator's
 records change (``Simulator.records``: a new state object, new work arrays, new vessel tracks).
 
-After each scene's advance the kernel evaluates the loads and the lines' top tensions at the state reached
-(unless it blew up), so the observation's tensions (``Simulator.top_tensions_n``) need no second kernel call and
-that work runs on the batch's threads. An env slot also passes its
-:class:`~moor_env.envs.measures.SlotBuffers`: the kernel then writes the quantities its observation reads
-(``M_*``, :func:`~moor_env.envs.measures.measure_scene`) and, where the advance asks for it, first copies
-the state into a backup (the env repeats a diverged coarse pre-release advance from it). Done in Python on every
-env step they cost a numpy copy of nine arrays and a dozen small kernel and numpy calls; done here (and with the
-observations normalised for all slots at once) the batched env's Python per slot and step is about 48 us rather
-than 68 us (calm default scene, 16 slots, one thread, profiler off).
+After each scene's advance the kernel evaluates the loads at the state reached and checks it
+(:func:`~moor_env.physics.integrate.end_state_status`; an advance that takes a backup also fails where a tension
+passes its material's breaking load), then the lines' top tensions (unless it blew up), so the observation's
+tensions (``Simulator.top_tensions_n``) need no second kernel call and that work runs on the batch's threads. An
+env slot also passes its :class:`~moor_env.envs.measures.SlotBuffers`: the kernel then writes the quantities its
+observation reads (``M_*``, :func:`~moor_env.envs.measures.measure_scene`) and, where the advance asks for it,
+first copies the state into a backup (the env repeats a diverged coarse pre-release advance from it). Done in
+Python on every env step they cost a numpy copy of nine arrays and a dozen small kernel and numpy calls; done here
+(and with the observations normalised for all slots at once) the batched env's Python per slot and step is about 48
+us rather than 68 us (calm default scene, 16 slots, one thread, profiler off).
 
 Why the single env goes through this kernel too (with one scene): LLVM optimises ``advance`` together with its
 caller (inlining, constant arguments), and under the kernels' fastmath flags (``physics/_jit.py``) how it rounds
@@ -50,7 +51,7 @@ import numpy as np
 from moor_env.envs.measures import N_SPEC, SlotBuffers, measure_scene
 from moor_env.errors import SimulationDiverged
 from moor_env.physics import layout as L
-from moor_env.physics.integrate import advance
+from moor_env.physics.integrate import advance, end_state_status
 from moor_env.physics.line import top_tensions
 from moor_env.physics.loads import compute_accelerations
 from moor_env.physics.record_table import N_TABLE_COLUMNS, copy_rows, record_from_table, table_rows
@@ -98,7 +99,12 @@ def advance_many(scalars, addresses, out_i, out_t):
             model, state, scalars[i, IN_T], scalars[i, IN_T_END], scalars[i, IN_DT],
             np.int64(scalars[i, IN_INTEGRATOR]), scalars[i, IN_DETECT] != 0.0, 0)
         if status < L.STATUS_NONFINITE:
-            compute_accelerations(model, state)
+            max_strain, worst_seg = compute_accelerations(model, state)
+            # an advance with a backup is a coarse one the env repeats at the scene's step if it fails
+            failed, kind, index = end_state_status(model, state, max_strain, worst_seg, scalars[i, IN_BACKUP] != 0.0)
+            if failed != L.STATUS_RUNNING:
+                status, fail_kind, fail_index = failed, kind, index
+        if status < L.STATUS_NONFINITE:
             top_tensions(state.line_i, state.seg_i, state.node_i, state.node_force, state.seg_tension,
                          state.top_tension)
             if slot.measure_spec.shape[0] == N_SPEC:

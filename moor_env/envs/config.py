@@ -95,6 +95,13 @@ class ControlConfig(_Strict):
         None, gt=0.0, le=0.5,
         description="pre_release_dt_s for a sea without waves (Hs 0), where the loop moves only with the "
                     "vessels and the winch [s]; null: pre_release_dt_s")
+    pre_release_travel_segments: float | None = Field(
+        0.5, gt=0.0, le=10.0,
+        description="a pre-release step coarser than the scene's is shortened (never below the scene's step) so "
+                    "that the fastest free line node, at its speed at the start of the advance, travels at most "
+                    "this many lengths of the shortest segment in one step: a loop swinging through several "
+                    "segment lengths per step turns its segments beyond what the linearised implicit step follows "
+                    "(docs/pre-release-step.md); null: no such limit")
     fall_dt_scale: float = Field(
         1.0, gt=0.0, le=1.0,
         description="the fall's integration step as a fraction of the scene's (or fall integrator's) step; a "

@@ -131,16 +131,34 @@ def remesh_for_fall(old: Simulator, model: Model) -> tuple[Simulator | None, str
 
 def pre_release_step_s(sim: Simulator, hs_m: float, cfg: ControlConfig) -> float:
     """The largest integration step before the release [s]: ``control.pre_release_dt_s`` (in a sea without waves,
-    ``hs_m`` 0, ``control.pre_release_dt_calm_s`` where set), never below the scene's step; the scene's step
-    where neither is set or the integrator is explicit (the explicit ones are bound by the lines' axial
-    stability limit whether or not the anchor falls)."""
+    ``hs_m`` 0, ``control.pre_release_dt_calm_s`` where set), shortened by :func:`travel_step_s` where the lines
+    move fast, never below the scene's step; the scene's step where neither is set or the integrator is explicit
+    (the explicit ones are bound by the lines' axial stability limit whether or not the anchor falls)."""
     step = cfg.pre_release_dt_s
     if hs_m == 0.0 and cfg.pre_release_dt_calm_s is not None:
         step = cfg.pre_release_dt_calm_s
     target = sim.dt
     if sim.integrator_code == INTEGRATOR_IMPLICIT_EULER and step is not None:
+        if cfg.pre_release_travel_segments is not None:
+            step = min(step, travel_step_s(sim, cfg.pre_release_travel_segments))
         target = max(step, sim.dt)
     return target
+
+
+def travel_step_s(sim: Simulator, segments: float) -> float:
+    """The step [s] in which the fastest free node, at its present speed, travels ``segments`` lengths of the
+    shortest active segment (a payout line's top segment left out: its length runs down to nothing before it
+    merges); infinite where nothing moves."""
+    st = sim.state
+    seg_i, line_i = st.seg_i, st.line_i
+    active = seg_i[:, L.SI_ACTIVE] != 0
+    payout = line_i[:, L.LI_PAYOUT] != 0
+    active[(line_i[payout, L.LI_SEG_START] + line_i[payout, L.LI_NSEG] - 1)] = False
+    free = st.node_i[:, L.NI_KIND] == L.NODE_FREE
+    speed2 = float(np.max(np.sum(st.node_vel[free] ** 2, axis=1), initial=0.0))
+    if speed2 == 0.0 or not active.any():
+        return math.inf
+    return segments * float(st.seg_f[active, L.SF_L0].min()) / math.sqrt(speed2)
 
 
 def even_step_s(span_s: float, max_step_s: float) -> float:

@@ -17,7 +17,9 @@ to a blow-up) with no Python work per step. Every kernel takes the model and sta
 
 A blow-up is caught every step: any node faster than the speed limit, any segment strained beyond the strain
 limit, or a non-finite value (NaN fails every comparison) ends the call with a status and the failing
-component, never with NaN returned as a result.
+component, never with NaN returned as a result. A step checks the loads at its start, so the state the last step
+of a call leaves is checked by :func:`end_state_status` once its loads are evaluated (the env's batch kernel does
+this after every advance).
 """
 
 from __future__ import annotations
@@ -40,9 +42,13 @@ from moor_env.physics.layout import (
     EF_SPEED_LIMIT,
     EF_STRAIN_LIMIT,
     LI_NSEG,
+    MF_MBL,
     N_BODY_STATE,
     NI_KIND,
     NODE_FREE,
+    SI_ACTIVE,
+    SI_MAT,
+    STATUS_BREAKING_LOAD,
     STATUS_NONFINITE,
     STATUS_RUNNING,
     STATUS_SPEED_LIMIT,
@@ -208,6 +214,34 @@ def step(model, state, t, dt, integrator, same_topology):
         return STATUS_SPEED_LIMIT, FAIL_NODE, worst_node
     if body_v2 > limit2:
         return STATUS_SPEED_LIMIT, FAIL_BODY, 0
+    return STATUS_RUNNING, FAIL_NONE, -1
+
+
+@jit_step
+def end_state_status(model, state, max_strain, worst_seg, breaking_load):
+    """Blow-up status of the state reached by an advance, its loads just evaluated (``max_strain`` and
+    ``worst_seg`` as :func:`~moor_env.physics.loads.compute_accelerations` returns them): STATUS_RUNNING if sound.
+
+    The step's own checks read the loads at its start, so without this the last step's result would only be
+    caught at the start of the next advance, after the caller has kept it. With ``breaking_load`` a segment
+    whose tension passes its material's minimum breaking load also fails (``STATUS_BREAKING_LOAD``): the check
+    for an advance at a step coarser than the scene's (the env's pre-release phase), where such a tension is
+    a linearisation that failed across the step (a chain loop turning through several segment lengths) rather
+    than a load, and the advance is repeated at the scene's step.
+
+    Returns
+    -------
+    status, fail_kind, fail_index : int
+    """
+    if max_strain != max_strain:
+        return STATUS_NONFINITE, FAIL_SEGMENT, worst_seg
+    if max_strain > model.env_f[EF_STRAIN_LIMIT]:
+        return STATUS_STRAIN_LIMIT, FAIL_SEGMENT, worst_seg
+    if breaking_load:
+        seg_i, seg_tension, mat_f = state.seg_i, state.seg_tension, model.mat_f
+        for s in range(seg_i.shape[0]):
+            if seg_i[s, SI_ACTIVE] != 0 and seg_tension[s] > mat_f[seg_i[s, SI_MAT], MF_MBL]:
+                return STATUS_BREAKING_LOAD, FAIL_SEGMENT, s
     return STATUS_RUNNING, FAIL_NONE, -1
 
 

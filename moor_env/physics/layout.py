@@ -178,6 +178,7 @@ STATUS_TIME_LIMIT = 2
 STATUS_NONFINITE = 3
 STATUS_SPEED_LIMIT = 4
 STATUS_STRAIN_LIMIT = 5
+STATUS_BREAKING_LOAD = 6  # only where the caller asks for it (a coarse step that may be repeated finer)
 STATUS_NAMES = {
     STATUS_RUNNING: "running",
     STATUS_TOUCHDOWN: "touchdown",
@@ -185,6 +186,7 @@ STATUS_NAMES = {
     STATUS_NONFINITE: "non-finite",
     STATUS_SPEED_LIMIT: "speed above limit",
     STATUS_STRAIN_LIMIT: "strain above limit",
+    STATUS_BREAKING_LOAD: "tension above breaking load",
 }
 
 # touchdown record slots (filled by the kernel at the interpolated touchdown instant)

@@ -12,6 +12,7 @@ import pytest
 
 from moor_env.envs.core import InstallationCore, run_advance
 from moor_env.envs.measures import line_summary
+from moor_env.envs.resolution import even_step_s
 from moor_env.errors import SimulationDiverged
 from moor_env.physics import layout as L
 
@@ -80,6 +81,69 @@ def test_fallback_repeats_the_advance_at_the_scene_step(tiny):
     assert np.array_equal(out_c[0], out_f[0]) and out_c[1] == out_f[1]
     for name in ("node_pos", "node_vel", "body_state"):
         assert np.array_equal(getattr(core.sim.state, name), getattr(fine.unwrapped.core.sim.state, name)), name
+
+
+def test_a_coarse_advance_ending_above_the_breaking_load_is_repeated_at_the_scene_step(tiny):
+    """With the breaking loads lowered below the hanging tensions, the coarse advance fails its end check and is
+    repeated at the scene's step, which is not checked against them: bit for bit the scene-step env's step."""
+    coarse = _tiny(tiny, pre_release_dt_s=0.13)
+    fine = _tiny(tiny, pre_release_dt_s=None)
+    coarse.reset(seed=5)
+    fine.reset(seed=5)
+    for env in (coarse, fine):
+        env.unwrapped.core.sim.model.mat_f[:, L.MF_MBL] = 1.0  # [N]
+    action = np.array([0.3, -0.4, -1.0], np.float32)
+    out_c = coarse.step(action)
+    out_f = fine.step(action)
+    core = coarse.unwrapped.core
+    assert core.fallbacks == 1 and out_c[4]["sim_status"] == "running"
+    assert np.array_equal(out_c[0], out_f[0])
+    for name in ("node_pos", "node_vel", "body_state"):
+        assert np.array_equal(getattr(core.sim.state, name), getattr(fine.unwrapped.core.sim.state, name)), name
+
+
+def test_a_fast_moving_line_shortens_the_coarse_step(tiny):
+    """A node at 100 m/s may travel half the shortest segment per step (``pre_release_travel_segments``): the
+    advance takes the fewest equal steps within that, never below the scene's step; at rest, or without the
+    limit, the configured coarse step."""
+    limited = _tiny(tiny, pre_release_dt_s=0.13, interval_s=0.25, pre_release_travel_segments=0.5)
+    free = _tiny(tiny, pre_release_dt_s=0.13, interval_s=0.25, pre_release_travel_segments=None)
+    for env in (limited, free):
+        env.reset(seed=3, options={"sea_state_hs_m": 0.0})
+    assert limited.unwrapped.core.begin_step(HOLD).dt_s == 0.125  # at rest
+    for env in (limited, free):
+        env.reset(seed=3, options={"sea_state_hs_m": 0.0})
+        st = env.unwrapped.core.sim.state
+        node = int(np.nonzero(st.node_i[:, L.NI_KIND] == L.NODE_FREE)[0][0])
+        st.node_vel[node] = (0.0, 0.0, -100.0)
+    core = limited.unwrapped.core
+    st = core.sim.state
+    shortest = st.seg_f[st.seg_i[:, L.SI_ACTIVE] != 0, L.SF_L0].min()
+    assert core.begin_step(HOLD).dt_s == even_step_s(0.25, max(0.5 * shortest / 100.0, core.sim.dt))
+    assert free.unwrapped.core.begin_step(HOLD).dt_s == 0.125
+
+
+def test_calm_loop_moved_by_the_crew_stays_within_its_loads(default_overrides):
+    """The default config in calm water, vessel and winch moved at random (the robustness benchmark's controls,
+    seed 1009: a 0.5 m chain loop that swings at a few m/s). The coarse steps must neither blow up nor leave a
+    segment loaded beyond half its breaking load before the release (reference: the line hangs at about a quarter
+    of it; with neither the travel limit nor the end check this episode ends in a blow-up at t = 4 s)."""
+    env = gym.make("moor_env/AnchorRelease-v0", overrides={**default_overrides, "scenario.sea_state_hs_m": 0.0})
+    core = env.unwrapped.core
+    rng = np.random.default_rng(1009)
+    rng.integers(25, 56)  # the benchmark draws its release step first
+    env.reset(seed=1009)
+    largest = 0.0
+    for k in range(20):
+        if k % 10 == 0:
+            rates = rng.uniform(-1.0, 1.0, 2)
+        _, _, terminated, truncated, info = env.step(np.array([rates[0], rates[1], -1.0], np.float32))
+        assert info["sim_status"] == "running" and not (terminated or truncated)
+        st = core.sim.state
+        active = st.seg_i[:, L.SI_ACTIVE] != 0
+        mbl = core.sim.model.mat_f[st.seg_i[active, L.SI_MAT], L.MF_MBL]
+        largest = max(largest, float(np.max(core.sim.work.seg_tension[active] / mbl)))
+    assert largest < 0.5
 
 
 def test_coarse_episode_is_deterministic_and_close_to_the_scene_step(tiny):
