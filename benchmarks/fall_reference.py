@@ -18,6 +18,8 @@ is driven by the seeded random controls of ``benchmarks/pre_release_step.py``. C
 * ``default, fall at 2x its step``: the same with the implicit fall at twice the model's step (22.5 ms in waves);
 * ``tight_line, 0.5 m loop``: the reference's resolution with the implicit fall (5.6 ms), the env's choice in
   waves before the ``in_waves`` keys;
+* ``tight_line, 1 m loop``: the reference's resolution with the 1 m loop chain of its ``in_waves`` keys
+  throughout and the implicit fall at its step (11.25 ms); in waves the same as ``default``;
 * ``coarse throughout``: the coarse resolution (2/2/20/30 m) before and after the release, implicit;
 * ``coarse, fine fall``: coarse before the release, remeshed onto the 0.5 m tight_line for the implicit fall;
 * ``coarse, explicit fall``: coarse throughout with the explicit fall (on 2 m chain, about 0.7 ms).
@@ -53,9 +55,10 @@ from _docs import DOCS, load_result, run_line, table, write_blocks  # noqa: E402
 from _machine import run_record, write_results  # noqa: E402
 from fall_step import EXPLICIT_FALL, scale_fall_step  # noqa: E402
 from pre_release_step import run_episode  # noqa: E402
-from remesh_at_release import TIGHT, make_case_env  # noqa: E402
+from remesh_at_release import TIGHT, TIGHT_WAVES, make_case_env  # noqa: E402
 
 import moor_env  # noqa: E402, F401 - registers the envs
+from agents.statistics import paired_bootstrap_interval  # noqa: E402
 from moor_env.envs import anchor_release  # noqa: E402
 from moor_env.envs import core as envcore  # noqa: E402
 from moor_env.physics import layout as L  # noqa: E402
@@ -69,11 +72,14 @@ INSIDE_M = 0.05  # past the back end by more than this: inside the anchor, beyon
 TRACE_INTERVAL_S = 0.01
 # name, env overrides, pre-release resolution forced ({}: coarse; None: the env's), fall resolution (False: env's),
 # fall step as a multiple of the fall model's step
+LOOP_05M = "tight_line, 0.5 m loop"
+LOOP_1M = "tight_line, 1 m loop"
 CASES = (
     ("reference", EXPLICIT_FALL, TIGHT, TIGHT, 1.0),
     ("default", {}, None, False, 1.0),
     ("default, fall at 2x its step", {}, None, False, 2.0),
-    ("tight_line, 0.5 m loop", {}, TIGHT, TIGHT, 1.0),
+    (LOOP_05M, {}, TIGHT, TIGHT, 1.0),
+    (LOOP_1M, {}, TIGHT_WAVES, TIGHT_WAVES, 1.0),
     ("coarse throughout", {}, {}, None, 1.0),
     ("coarse, fine fall", {}, {}, TIGHT, 1.0),
     ("coarse, explicit fall", EXPLICIT_FALL, {}, None, 1.0),
@@ -194,6 +200,12 @@ def docs_blocks(result: dict, stem: str) -> list[tuple[Path, str, str]]:
             f"{result['fast_and_vertical']}.", "",
             table(["case", "speed diff median / p90 [m/s]", "signed mean [m/s]", "tilt diff median / p90 [deg]",
                    "fast and vertical", "chain inside", "CPU s/episode"], rows)]
+    loop = LOOP_1M if LOOP_1M in result["summary"] else "default"
+    paired = paired_loops(result["rows"], loop)
+    if paired is not None:
+        text += ["", f"Paired on the episodes, `{loop}` minus `{LOOP_05M}`: mean absolute speed difference to the "
+                 f"reference {paired['mean']:+.3f} m/s [{paired['ci'][0]:+.3f}, {paired['ci'][1]:+.3f}] (paired "
+                 f"bootstrap 95 %, {paired['episodes']} episodes)."]
     split_rows = []
     for part, label in SPLITS:
         split = result.get(f"summary_reference_chain_{part}")
@@ -208,6 +220,22 @@ def docs_blocks(result: dict, stem: str) -> list[tuple[Path, str, str]]:
     split_text = table(["reference chain ends (episodes)", "case", "speed diff median / p90 [m/s]",
                         "signed mean [m/s]", "tilt diff median / p90 [deg]"], split_rows)
     return [(DOC, stem, "\n".join(text)), (DOC, f"{stem}:split", split_text)]
+
+
+def paired_loops(rows: list[dict], loop: str) -> dict | None:
+    """Mean over the episodes of |speed - reference| of ``loop`` minus that of the 0.5 m loop, with its paired
+    bootstrap interval (None where a case is missing)."""
+    by_case: dict[str, dict[int, float | None]] = {}
+    for r in rows:
+        by_case.setdefault(r["case"], {})[r["seed"]] = r["speed_m_s"]
+    ref, a, b = by_case.get("reference"), by_case.get(loop), by_case.get(LOOP_05M)
+    if ref is None or a is None or b is None:
+        return None
+    seeds = [k for k, v in ref.items() if v is not None and a.get(k) is not None and b.get(k) is not None]
+    da = np.abs([a[k] - ref[k] for k in seeds])
+    db = np.abs([b[k] - ref[k] for k in seeds])
+    low, high = paired_bootstrap_interval(da, db)
+    return {"episodes": len(seeds), "mean": float(np.mean(da - db)), "ci": [low, high]}
 
 
 def docs_from_results() -> list[tuple[Path, str, str]]:

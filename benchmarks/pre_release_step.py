@@ -77,6 +77,7 @@ def run_episode(env, seed: int) -> dict:
     cpu0 = time.process_time()
     env.reset(seed=seed)
     release = {}
+    tension_over_mbl = 0.0
     for k in range(60):
         if k % 10 == 0:
             rates = rng.uniform(-1.0, 1.0, 2)
@@ -87,12 +88,23 @@ def run_episode(env, seed: int) -> dict:
                                                               np.float32))
         if terminated or truncated:
             break
+        if k < release_step:
+            tension_over_mbl = max(tension_over_mbl, largest_tension_over_mbl(core.sim))
     td = info.get("touchdown", {})
     return {"seed": seed, "status": info["sim_status"], "cpu_s": time.process_time() - cpu0,
             "speed_m_s": td.get("speed_m_s"), "tilt_deg": td.get("tilt_deg"),
             "chain_past_back_end_m": td.get("chain_past_back_end_m"), "release": release,
             "scene_dt_s": core.sim.dt, "fallbacks": core.fallbacks, "scenario": core.scenario,
-            "fall_resolution": info.get("fall_resolution")}
+            "fall_resolution": info.get("fall_resolution"), "pre_release_tension_over_mbl": tension_over_mbl}
+
+
+def largest_tension_over_mbl(sim) -> float:
+    """The largest segment tension of the state (its loads as the last advance left them) over its material's
+    minimum breaking load."""
+    st = sim.state
+    active = st.seg_i[:, L.SI_ACTIVE] != 0
+    mbl = sim.model.mat_f[st.seg_i[active, L.SI_MAT], L.MF_MBL]
+    return float(np.max(sim.work.seg_tension[active] / mbl, initial=0.0))
 
 
 def _summary(rows: list[dict], case: str) -> dict:

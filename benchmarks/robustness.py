@@ -7,9 +7,12 @@ from the committed JSON).
 Each episode draws its scenario from the default config (seeds 5000, 5001, ...), once with the config's waves and
 once with Hs 0, and is driven by the seeded random controls of ``benchmarks/pre_release_step.py`` (spacing and
 winch rates redrawn every 10 s, release at a random step between 25 and 55). Counted: touchdowns, episodes that
-ended otherwise (with their status), and fallbacks (pre-release advances repeated at the scene's step after a
-blow-up with the coarse pre-release step). The CPU figures include the reset's static solves; episode costs are
-measured by ``benchmarks/bench_env.py``.
+ended otherwise (with their status), fallbacks (pre-release advances repeated at the scene's step after a
+blow-up with the coarse pre-release step, or a tension above a material's breaking load at its end), and the
+largest segment tension over its material's minimum breaking load after any control step before the release.
+Each sea runs twice: the env as configured, and without the limit on how far a node may travel in one coarse
+step (``control.pre_release_travel_segments: null``). The CPU figures include the reset's static solves; episode
+costs are measured by ``benchmarks/bench_env.py``.
 """
 
 from __future__ import annotations
@@ -35,24 +38,49 @@ import moor_env  # noqa: E402, F401 - registers the envs
 
 RESULTS = ROOT / "benchmarks" / "results" / "robustness.json"
 SEAS = {"waves": {}, "calm": {"scenario.sea_state_hs_m": 0.0}}
+CASES = {"env": {}, "no travel limit": {"control.pre_release_travel_segments": None}}
 DOC = DOCS / "robustness.md"
 COMMAND = "python benchmarks/robustness.py"
 
 
 def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
     """The table of one run (docs/robustness.md)."""
-    rows = [[sea, s["episodes"], s["touchdowns"], len(s["not_touchdown"]), s["fallbacks"],
-             s["fall_resolution"].get("tight_line", 0), f"{s['touchdown_speed_m_s_median']:.2f}",
-             f"{s['tilt_deg_median']:.2f}"] for sea, s in result["summary"].items()]
+    rows = []
+    for key, s in result["summary"].items():
+        sea, _, case = key.partition(", ")
+        tm = s["pre_release_tension_over_mbl"]
+        rows.append([sea, case, s["episodes"], s["touchdowns"], len(s["not_touchdown"]), s["fallbacks"],
+                     s["fall_resolution"].get("tight_line", 0), f"{s['touchdown_speed_m_s_median']:.2f}",
+                     f"{s['tilt_deg_median']:.2f}", f"{tm['median']:.3f} / {tm['p99']:.3f} / {tm['max']:.3f}",
+                     f"{s['cpu_s_median']:.3f}"])
     text = "\n".join([run_line(result, COMMAND), "", table(
-        ["sea", "episodes", "touchdowns", "other ends", "fallbacks", "falls on tight_line",
-         "touchdown speed median [m/s]", "tilt median [deg]"], rows)])
+        ["sea", "case", "episodes", "touchdowns", "other ends", "fallbacks", "falls on tight_line",
+         "touchdown speed median [m/s]", "tilt median [deg]",
+         "largest tension / MBL before release, median / p99 / max", "CPU s/episode (median)"], rows)])
     return [(DOC, "robustness", text)]
 
 
 def docs_from_results() -> list[tuple[Path, str, str]]:
     """:func:`docs_blocks` of the committed ``benchmarks/results/robustness.json``."""
     return docs_blocks(load_result("robustness"))
+
+
+def _summary(rows: list[dict]) -> dict:
+    """Counts and medians of one sea and case."""
+    over = np.array([r["pre_release_tension_over_mbl"] for r in rows])
+    return {
+        "episodes": len(rows),
+        "touchdowns": sum(r["status"] == "touchdown" for r in rows),
+        "fallbacks": int(sum(r["fallbacks"] for r in rows)),
+        "not_touchdown": [{"seed": r["seed"], "status": r["status"]} for r in rows if r["status"] != "touchdown"],
+        "fall_resolution": {k: sum(r["fall_resolution"] == k for r in rows)
+                            for k in sorted({str(r["fall_resolution"]) for r in rows})},
+        "touchdown_speed_m_s_median": float(np.median([r["speed_m_s"] for r in rows if r["speed_m_s"]])),
+        "tilt_deg_median": float(np.median([r["tilt_deg"] for r in rows if r["tilt_deg"] is not None])),
+        "pre_release_tension_over_mbl": {"median": float(np.median(over)), "p99": float(np.percentile(over, 99)),
+                                         "max": float(over.max())},
+        "cpu_s_median": float(np.median([r["cpu_s"] for r in rows])),
+    }
 
 
 def main(argv: list[str] | None = None) -> dict:
@@ -67,28 +95,16 @@ def main(argv: list[str] | None = None) -> dict:
         return load_result("robustness")
     load_before = os.getloadavg()[0]
     summary = {}
-    for sea, overrides in SEAS.items():
-        env = gym.make(ENV_ID, overrides=overrides)
-        rows = [run_episode(env, seed) for seed in tqdm(range(5000, 5000 + args.episodes), desc=sea)]
-        summary[sea] = {
-            "episodes": len(rows),
-            "touchdowns": sum(r["status"] == "touchdown" for r in rows),
-            "fallbacks": int(sum(r["fallbacks"] for r in rows)),
-            "not_touchdown": [{"seed": r["seed"], "status": r["status"]} for r in rows if r["status"] != "touchdown"],
-            "fall_resolution": {k: sum(r["fall_resolution"] == k for r in rows)
-                                for k in sorted({str(r["fall_resolution"]) for r in rows})},
-            "touchdown_speed_m_s_median": float(np.median([r["speed_m_s"] for r in rows if r["speed_m_s"]])),
-            "tilt_deg_median": float(np.median([r["tilt_deg"] for r in rows if r["tilt_deg"] is not None])),
-        }
+    for sea, sea_overrides in SEAS.items():
+        for case, overrides in CASES.items():
+            env = gym.make(ENV_ID, overrides={**sea_overrides, **overrides})
+            rows = [run_episode(env, seed) for seed in tqdm(range(5000, 5000 + args.episodes), desc=f"{sea}, {case}")]
+            summary[f"{sea}, {case}"] = _summary(rows)
     result = {**run_record(load_before), "config": "anchor-release (default), scenarios drawn with seeds 5000..",
               "summary": summary}
     write_results(RESULTS, result)
     write_blocks(docs_blocks(result))
-    print("| sea | episodes | touchdowns | other ends | fallbacks | fall on tight_line |")
-    print("|---|---|---|---|---|---|")
-    for sea, s in summary.items():
-        print(f"| {sea} | {s['episodes']} | {s['touchdowns']} | {len(s['not_touchdown'])} | {s['fallbacks']} | "
-              f"{s['fall_resolution'].get('tight_line', 0)} |")
+    print(docs_blocks(result)[0][2])
     return result
 
 
