@@ -8,8 +8,8 @@ Each episode draws its scenario from the default config (seeds 5000, 5001, ...),
 once with Hs 0, and is driven by the seeded random controls of ``benchmarks/pre_release_step.py`` (spacing and
 winch rates redrawn every 10 s, release at a random step between 25 and 55). Counted: touchdowns, episodes that
 ended otherwise (with their status), fallbacks (pre-release advances repeated at the scene's step after a
-blow-up with the coarse pre-release step, or a tension above a material's breaking load at its end), and the
-largest segment tension over its material's minimum breaking load after any control step before the release.
+blow-up with the coarse pre-release step, or one that raised a line's running maximum tension above its breaking
+load), and the largest running maximum tension of a line over its minimum breaking load at the release.
 Each sea runs twice: the env as configured, and without the limit on how far a node may travel in one coarse
 step (``control.pre_release_travel_segments: null``). The CPU figures include the reset's static solves; episode
 costs are measured by ``benchmarks/bench_env.py``.
@@ -56,7 +56,7 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
     text = "\n".join([run_line(result, COMMAND), "", table(
         ["sea", "case", "episodes", "touchdowns", "other ends", "fallbacks", "falls on tight_line",
          "touchdown speed median [m/s]", "tilt median [deg]",
-         "largest tension / MBL before release, median / p99 / max", "CPU s/episode (median)"], rows)])
+         "largest line tension / MBL before release, median / p99 / max", "CPU s/episode (median)"], rows)])
     return [(DOC, "robustness", text)]
 
 

@@ -17,15 +17,15 @@ in use, checks dtype, rank and C layout when it builds an entry, and rebuilds th
 records change (``Simulator.records``: a new state object, new work arrays, new vessel tracks).
 
 After each scene's advance the kernel evaluates the loads at the state reached and checks it
-(:func:`~moor_env.physics.integrate.end_state_status`; an advance that takes a backup also fails where a tension
-passes its material's breaking load), then the lines' top tensions (unless it blew up), so the observation's
-tensions (``Simulator.top_tensions_n``) need no second kernel call and that work runs on the batch's threads. An
-env slot also passes its :class:`~moor_env.envs.measures.SlotBuffers`: the kernel then writes the quantities its
-observation reads (``M_*``, :func:`~moor_env.envs.measures.measure_scene`) and, where the advance asks for it,
-first copies the state into a backup (the env repeats a diverged coarse pre-release advance from it). Done in
-Python on every env step they cost a numpy copy of nine arrays and a dozen small kernel and numpy calls; done here
-(and with the observations normalised for all slots at once) the batched env's Python per slot and step is about 48
-us rather than 68 us (calm default scene, 16 slots, one thread, profiler off).
+(:func:`~moor_env.physics.integrate.end_state_status`; an advance that takes a backup also fails where it raised a
+line's running maximum tension above the line's breaking load), then the lines' top tensions (unless it blew up),
+so the observation's tensions (``Simulator.top_tensions_n``) need no second kernel call and that work runs on the
+batch's threads. An env slot also passes its :class:`~moor_env.envs.measures.SlotBuffers`: the kernel then writes
+the quantities its observation reads (``M_*``, :func:`~moor_env.envs.measures.measure_scene`) and, where the
+advance asks for it, first copies the state into a backup (the env repeats a diverged coarse pre-release advance
+from it). Done in Python on every env step they cost a numpy copy of nine arrays and a dozen small kernel and numpy
+calls; done here (and with the observations normalised for all slots at once) the batched env's Python per slot and
+step is about 48 us rather than 68 us (calm default scene, 16 slots, one thread, profiler off).
 
 Why the single env goes through this kernel too (with one scene): LLVM optimises ``advance`` together with its
 caller (inlining, constant arguments), and under the kernels' fastmath flags (``physics/_jit.py``) how it rounds
@@ -93,15 +93,17 @@ def advance_many(scalars, addresses, out_i, out_t):
         model = record_from_table(ModelRecord, a, ROW_MODEL)
         state = record_from_table(StateRecord, a, ROW_STATE)
         slot = record_from_table(SlotRecord, a, ROW_SLOT)
-        if scalars[i, IN_BACKUP] != 0.0:
+        coarse = scalars[i, IN_BACKUP] != 0.0
+        if coarse:
             copy_rows(a, ROW_STATE, ROW_BACKUP, N_ROWS - ROW_BACKUP)
+        # a coarse advance is checked against the lines' breaking loads: their running maxima before it
+        max_tension_before = state.line_f[:, L.LF_MAX_TENSION].copy() if coarse else np.empty(0)
         status, t_reached, n_steps, fail_kind, fail_index = advance(
             model, state, scalars[i, IN_T], scalars[i, IN_T_END], scalars[i, IN_DT],
             np.int64(scalars[i, IN_INTEGRATOR]), scalars[i, IN_DETECT] != 0.0, 0)
         if status < L.STATUS_NONFINITE:
             max_strain, worst_seg = compute_accelerations(model, state)
-            # an advance with a backup is a coarse one the env repeats at the scene's step if it fails
-            failed, kind, index = end_state_status(model, state, max_strain, worst_seg, scalars[i, IN_BACKUP] != 0.0)
+            failed, kind, index = end_state_status(model, state, max_strain, worst_seg, max_tension_before)
             if failed != L.STATUS_RUNNING:
                 status, fail_kind, fail_index = failed, kind, index
         if status < L.STATUS_NONFINITE:

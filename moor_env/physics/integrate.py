@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.anchor import body_point, rotate_axis
 from moor_env.physics.contact_broadphase import note_moved, prepare_near
@@ -41,12 +43,14 @@ from moor_env.physics.layout import (
     EF_DEPTH,
     EF_SPEED_LIMIT,
     EF_STRAIN_LIMIT,
+    LF_MAX_TENSION,
     LI_NSEG,
     MF_MBL,
     N_BODY_STATE,
     NI_KIND,
     NODE_FREE,
     SI_ACTIVE,
+    SI_LINE,
     SI_MAT,
     STATUS_BREAKING_LOAD,
     STATUS_NONFINITE,
@@ -218,16 +222,18 @@ def step(model, state, t, dt, integrator, same_topology):
 
 
 @jit_step
-def end_state_status(model, state, max_strain, worst_seg, breaking_load):
+def end_state_status(model, state, max_strain, worst_seg, max_tension_before):
     """Blow-up status of the state reached by an advance, its loads just evaluated (``max_strain`` and
     ``worst_seg`` as :func:`~moor_env.physics.loads.compute_accelerations` returns them): STATUS_RUNNING if sound.
 
     The step's own checks read the loads at its start, so without this the last step's result would only be
-    caught at the start of the next advance, after the caller has kept it. With ``breaking_load`` a segment
-    whose tension passes its material's minimum breaking load also fails (``STATUS_BREAKING_LOAD``): the check
-    for an advance at a step coarser than the scene's (the env's pre-release phase), where such a tension is
-    a linearisation that failed across the step (a chain loop turning through several segment lengths) rather
-    than a load, and the advance is repeated at the scene's step.
+    caught at the start of the next advance, after the caller has kept it. ``max_tension_before`` (each line's
+    running maximum tension before the advance [N]; empty: no such check) also fails an advance that raised a
+    line's running maximum above the line's breaking load (the least of its materials' MBL;
+    ``STATUS_BREAKING_LOAD``, at the line's segment most loaded against its MBL now): the check of an advance at a
+    step coarser than the scene's (the env's pre-release phase), where such a peak comes from a segment turned
+    through several lengths in one step (a swinging chain loop) rather than from a load, and the advance is
+    repeated at the scene's step.
 
     Returns
     -------
@@ -237,11 +243,24 @@ def end_state_status(model, state, max_strain, worst_seg, breaking_load):
         return STATUS_NONFINITE, FAIL_SEGMENT, worst_seg
     if max_strain > model.env_f[EF_STRAIN_LIMIT]:
         return STATUS_STRAIN_LIMIT, FAIL_SEGMENT, worst_seg
-    if breaking_load:
-        seg_i, seg_tension, mat_f = state.seg_i, state.seg_tension, model.mat_f
-        for s in range(seg_i.shape[0]):
-            if seg_i[s, SI_ACTIVE] != 0 and seg_tension[s] > mat_f[seg_i[s, SI_MAT], MF_MBL]:
-                return STATUS_BREAKING_LOAD, FAIL_SEGMENT, s
+    n_lines = max_tension_before.shape[0]
+    if n_lines == 0:
+        return STATUS_RUNNING, FAIL_NONE, -1
+    seg_i, seg_tension, mat_f, line_f = state.seg_i, state.seg_tension, model.mat_f, state.line_f
+    breaking = np.full(n_lines, np.inf)
+    for s in range(seg_i.shape[0]):
+        if seg_i[s, SI_ACTIVE] != 0:
+            line = seg_i[s, SI_LINE]
+            breaking[line] = min(breaking[line], mat_f[seg_i[s, SI_MAT], MF_MBL])
+    for line in range(n_lines):
+        if line_f[line, LF_MAX_TENSION] > breaking[line] >= max_tension_before[line]:
+            worst, ratio = -1, -1.0
+            for s in range(seg_i.shape[0]):
+                if seg_i[s, SI_ACTIVE] != 0 and seg_i[s, SI_LINE] == line:
+                    r = seg_tension[s] / mat_f[seg_i[s, SI_MAT], MF_MBL]
+                    if r > ratio:
+                        worst, ratio = s, r
+            return STATUS_BREAKING_LOAD, FAIL_SEGMENT, worst
     return STATUS_RUNNING, FAIL_NONE, -1
 
 

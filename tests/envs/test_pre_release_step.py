@@ -83,15 +83,17 @@ def test_fallback_repeats_the_advance_at_the_scene_step(tiny):
         assert np.array_equal(getattr(core.sim.state, name), getattr(fine.unwrapped.core.sim.state, name)), name
 
 
-def test_a_coarse_advance_ending_above_the_breaking_load_is_repeated_at_the_scene_step(tiny):
-    """With the breaking loads lowered below the hanging tensions, the coarse advance fails its end check and is
-    repeated at the scene's step, which is not checked against them: bit for bit the scene-step env's step."""
+def test_a_coarse_advance_raising_a_tension_above_the_breaking_load_is_repeated_at_the_scene_step(tiny):
+    """With the breaking loads lowered below the hanging tensions and the running maxima cleared, the coarse
+    advance raises them above it, fails its end check and is repeated at the scene's step, which is not checked
+    against them: bit for bit the scene-step env's step."""
     coarse = _tiny(tiny, pre_release_dt_s=0.13)
     fine = _tiny(tiny, pre_release_dt_s=None)
     coarse.reset(seed=5)
     fine.reset(seed=5)
     for env in (coarse, fine):
         env.unwrapped.core.sim.model.mat_f[:, L.MF_MBL] = 1.0  # [N]
+        env.unwrapped.core.sim.state.line_f[:, L.LF_MAX_TENSION] = 0.0
     action = np.array([0.3, -0.4, -1.0], np.float32)
     out_c = coarse.step(action)
     out_f = fine.step(action)
@@ -125,9 +127,10 @@ def test_a_fast_moving_line_shortens_the_coarse_step(tiny):
 
 def test_calm_loop_moved_by_the_crew_stays_within_its_loads(default_overrides):
     """The default config in calm water, vessel and winch moved at random (the robustness benchmark's controls,
-    seed 1009: a 0.5 m chain loop that swings at a few m/s). The coarse steps must neither blow up nor leave a
-    segment loaded beyond half its breaking load before the release (reference: the line hangs at about a quarter
-    of it; with neither the travel limit nor the end check this episode ends in a blow-up at t = 4 s)."""
+    seed 1009: a 0.5 m chain loop that swings at a few m/s). The coarse steps must neither blow up nor load a
+    segment beyond half its breaking load at a step's end, nor raise a line's running maximum tension (what the
+    limit check reads) beyond it (reference: the lines hang at a quarter of it at most; with neither the travel
+    limit nor the end check this episode ends in a blow-up at t = 4 s)."""
     env = gym.make("moor_env/AnchorRelease-v0", overrides={**default_overrides, "scenario.sea_state_hs_m": 0.0})
     core = env.unwrapped.core
     rng = np.random.default_rng(1009)
@@ -144,6 +147,9 @@ def test_calm_loop_moved_by_the_crew_stays_within_its_loads(default_overrides):
         mbl = core.sim.model.mat_f[st.seg_i[active, L.SI_MAT], L.MF_MBL]
         largest = max(largest, float(np.max(core.sim.work.seg_tension[active] / mbl)))
     assert largest < 0.5
+    running = {name: core.sim.state.line_f[info.index, L.LF_MAX_TENSION] / core.mbl[name]
+               for name, info in core.sim.model.lines.items()}
+    assert max(running.values()) < 0.5, running
 
 
 def test_coarse_episode_is_deterministic_and_close_to_the_scene_step(tiny):

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from moor_env import load_scene, solve_statics
 from moor_env.physics import layout as L
 from moor_env.physics.integrate import FAIL_NONE, FAIL_SEGMENT, end_state_status
@@ -17,26 +19,37 @@ def _hanging():
     return model, state, max_strain, worst
 
 
+NO_CHECK = np.zeros(0)  # no breaking-load check
+
+
 def test_a_sound_state_passes_with_and_without_the_breaking_load_check():
     model, state, max_strain, worst = _hanging()
-    for breaking_load in (False, True):
-        assert end_state_status(model, state, max_strain, worst, breaking_load) == (L.STATUS_RUNNING, FAIL_NONE, -1)
+    before = np.zeros(state.line_i.shape[0])
+    for max_tension_before in (NO_CHECK, before):
+        assert end_state_status(model, state, max_strain, worst, max_tension_before) == (
+            L.STATUS_RUNNING, FAIL_NONE, -1)
 
 
 def test_strain_and_non_finite_loads_fail_whatever_the_advance():
     model, state, _, _ = _hanging()
     limit = model.env_f[L.EF_STRAIN_LIMIT]
-    assert end_state_status(model, state, 1.01 * limit, 7, False) == (L.STATUS_STRAIN_LIMIT, FAIL_SEGMENT, 7)
-    assert end_state_status(model, state, math.nan, 3, False) == (L.STATUS_NONFINITE, FAIL_SEGMENT, 3)
+    assert end_state_status(model, state, 1.01 * limit, 7, NO_CHECK) == (L.STATUS_STRAIN_LIMIT, FAIL_SEGMENT, 7)
+    assert end_state_status(model, state, math.nan, 3, NO_CHECK) == (L.STATUS_NONFINITE, FAIL_SEGMENT, 3)
 
 
-def test_a_tension_above_the_breaking_load_fails_only_where_asked():
-    """With every material's breaking load lowered below the hanging tensions, the first taut segment fails
-    the coarse check (``breaking_load``) and nothing else does."""
+def test_a_running_maximum_raised_above_the_breaking_load_fails_only_where_asked():
+    """With every material's breaking load lowered below the hanging tensions, an advance that raised a line's
+    running maximum tension above it fails the coarse check, at that line's most loaded segment; one whose lines
+    were above it before does not, nor an advance checked without it."""
     model, state, max_strain, worst = _hanging()
     model.mat_f[:, L.MF_MBL] = 1.0  # [N]
-    assert end_state_status(model, state, max_strain, worst, False)[0] == L.STATUS_RUNNING
-    status, kind, index = end_state_status(model, state, max_strain, worst, True)
+    n_lines = state.line_i.shape[0]
+    assert end_state_status(model, state, max_strain, worst, NO_CHECK)[0] == L.STATUS_RUNNING
+    status, kind, index = end_state_status(model, state, max_strain, worst, np.zeros(n_lines))
     assert (status, kind) == (L.STATUS_BREAKING_LOAD, FAIL_SEGMENT)
-    taut = [s for s in range(state.seg_i.shape[0]) if state.seg_i[s, L.SI_ACTIVE] and state.seg_tension[s] > 1.0]
-    assert index == taut[0]
+    line = state.seg_i[index, L.SI_LINE]
+    assert line == 0 and state.line_f[line, L.LF_MAX_TENSION] > 1.0
+    in_line = (state.seg_i[:, L.SI_LINE] == line) & (state.seg_i[:, L.SI_ACTIVE] != 0)
+    assert state.seg_tension[index] == state.seg_tension[in_line].max()
+    above_before = state.line_f[:, L.LF_MAX_TENSION].copy()
+    assert end_state_status(model, state, max_strain, worst, above_before)[0] == L.STATUS_RUNNING
