@@ -60,7 +60,8 @@ class SimulationDiverged(MoorEnvError, RuntimeError):
     component : str
         Which part of the model failed first, e.g. ``line 'mooring' segment 12`` or ``anchor``.
     reason : str
-        ``non-finite``, ``speed above limit`` or ``strain above limit``.
+        ``non-finite``, ``speed above limit``, ``strain above limit``, or ``tension above breaking load`` (only an
+        env's coarse pre-release advance, which the env then repeats at the scene's step).
     """
 
     def __init__(self, time_s: float, component: str, reason: str) -> None:
