@@ -26,8 +26,10 @@ a random step 25-55). Cases, each part against its own reference:
 A third part (``waves check``) is why ``fast`` takes its tight_line resolution in any waves
 (``waves_above_hs_m: 0``): the default geometry (500 m, spacing 0.1 h, line 1.08 h, no current; slack, coarse in
 calm water) held for 59 s at Hs 0-1 m, six sea-state seeds each, falling on the coarse and on the tight_line
-resolution (with its ``in_waves`` keys above Hs 0) from the same coarse pre-release state. Against the explicit
-reference fall, ``benchmarks/fall_reference.py``.
+resolution (with its ``in_waves`` keys above Hs 0) from the same coarse pre-release state. A fourth
+(``held calm``) sets that geometry's calm falls against the explicit reference fall: tight_line throughout with
+the fall integrated explicitly, eight seeds; the episodes with random controls are set against it in
+``benchmarks/fall_reference.py``.
 
 Compared with the reference: touchdown speed and tilt; CPU per episode (reset without the static solve, which
 is cached, the pre-release phase and the fall).
@@ -51,6 +53,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 import gymnasium as gym  # noqa: E402
 from _docs import DOCS, load_result, run_line, table, write_blocks  # noqa: E402
 from _machine import run_record, write_results  # noqa: E402
+from fall_step import EXPLICIT_FALL  # noqa: E402
 from pre_release_step import ReferenceVariants, run_episode  # noqa: E402
 
 import moor_env  # noqa: E402, F401 - registers the envs
@@ -121,6 +124,48 @@ def waves_check(seeds: int = 6) -> list[dict]:
     return out
 
 
+HELD_CALM_CASES = (  # name, env overrides, pre-release resolution forced, fall resolution forced (None: coarse)
+    ("reference: tight_line throughout, explicit fall", EXPLICIT_FALL, TIGHT, TIGHT),
+    ("tight_line throughout", {}, TIGHT, TIGHT),
+    ("coarse, fine fall", {}, {}, TIGHT),
+    ("coarse throughout (the env's choice)", {}, {}, None),
+)
+
+
+def held_calm_check(seeds: int = 8) -> list[dict]:
+    """The default geometry held 59 s in calm water and released, on each resolution choice and against the
+    explicit reference fall (touchdown speed and tilt per seed and case)."""
+    hold = np.array([0.0, 0.0, -1.0], np.float32)
+    out = []
+    for name, overrides, pre, fall in tqdm(HELD_CALM_CASES, desc="held calm"):
+        env = make_case_env({**CALM, **overrides}, pre, fall)
+        for seed in range(seeds):
+            env.reset(seed=seed, options={**WAVES_SCENE, "sea_state_hs_m": 0.0})
+            for _ in range(59):
+                env.step(hold)
+            td = env.step(np.array([0.0, 0.0, 1.0], np.float32))[4]["touchdown"]
+            out.append({"case": name, "seed": seed, "speed_m_s": td["speed_m_s"], "tilt_deg": td["tilt_deg"]})
+    return out
+
+
+def _held_calm_table(rows: list[dict]) -> str:
+    """Each case of :func:`held_calm_check` against its reference, seed by seed."""
+    ref = {r["seed"]: r for r in rows if r["case"] == HELD_CALM_CASES[0][0]}
+    lines = []
+    for name, *_ in HELD_CALM_CASES:
+        mine = [r for r in rows if r["case"] == name]
+        if name == HELD_CALM_CASES[0][0]:
+            speeds = [r["speed_m_s"] for r in mine]
+            lines.append([name, len(mine), f"{min(speeds):.2f}-{max(speeds):.2f} m/s", "-", "-"])
+            continue
+        dv = np.array([r["speed_m_s"] - ref[r["seed"]]["speed_m_s"] for r in mine])
+        dt = np.abs([r["tilt_deg"] - ref[r["seed"]]["tilt_deg"] for r in mine])
+        lines.append([name, len(mine), f"{np.median(np.abs(dv)):.3f} / {np.abs(dv).max():.3f}", f"{dv.mean():+.3f}",
+                      f"{np.median(dt):.2f} / {dt.max():.2f}"])
+    return table(["case", "seeds", "touchdown speed diff median / max [m/s] (reference: its speeds)",
+                  "signed mean [m/s]", "tilt diff median / max [deg]"], lines)
+
+
 def _summary(rows: list[dict]) -> dict:
     out = {"episodes": len(rows), "cpu_s_median": float(np.median([x["cpu_s"] for x in rows])),
            "tight_falls": int(sum(x["fall_resolution"] == "tight_line" for x in rows)),
@@ -160,7 +205,10 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
         check.append([f"{hs:g}", d.size, f"{np.median(d):.3f} / {d.max():.3f}", f"{np.median(t):.2f} / {t.max():.2f}"])
     check_text = table(["Hs [m]", "seeds", "touchdown speed diff, median abs / max abs [m/s]",
                         "tilt diff, median abs / max abs [deg]"], check)
-    return [(DOC, "remesh_at_release", cases), (DOC, "remesh_at_release:waves_check", check_text)]
+    blocks = [(DOC, "remesh_at_release", cases), (DOC, "remesh_at_release:waves_check", check_text)]
+    if "held_calm" in result:
+        blocks.append((DOC, "remesh_at_release:held_calm", _held_calm_table(result["held_calm"])))
+    return blocks
 
 
 def docs_from_results() -> list[tuple[Path, str, str]]:
@@ -194,6 +242,7 @@ def main(argv: list[str] | None = None) -> dict:
                            dtilt_deg=row["tilt_deg"] - ref[part]["tilt_deg"])
             rows.append(row)
     waves = waves_check()
+    held = held_calm_check()
     summary = {f"{part}: {name}": _summary([r for r in rows if r["part"] == part and r["case"] == name])
                for part, name, *_ in CASES}
     result = {
@@ -202,6 +251,7 @@ def main(argv: list[str] | None = None) -> dict:
         "summary_abs_differences_to_each_parts_reference": summary,
         "rows": rows,
         "waves_check": waves,
+        "held_calm": held,
     }
     write_results(RESULTS, result)
     write_blocks(docs_blocks(result))

@@ -5,8 +5,8 @@ anchor falls, a coarse chain loop goes taut too early (``tight_line`` in ``confi
 stays slack and at rest the coarse one is within 0.2 % (docs/speed_vs_error.md). In the envs the geometry and
 motion that decide the fall's resolution are only known at the release, after the agent has moved the vessel and
 the winch. So a calm episode whose loop starts slack runs coarse and, if the loop is tight or moving at the
-release, the state is mapped onto the resolution the fall needs (:mod:`moor_env.envs.core`); measured against a
-fine run throughout, within 0.011 m/s in touchdown speed (benchmarks/remesh_at_release.py).
+release, the state is mapped onto the resolution the fall needs (:mod:`moor_env.envs.core`);
+``benchmarks/remesh_at_release.py`` measures what the coarse phase and the mapping change (docs/remesh-at-release.md).
 
 The mapping, per line, from its bottom node up: each run of segments of one material keeps its unstretched
 length and is split again into equal segments of the length the target model was compiled with for that run

@@ -8,10 +8,10 @@ its fall needs (:meth:`TightLineRule.fall`); :func:`remesh_for_fall` moves a sim
 (:func:`moor_env.remesh.remesh_state`), and where the remesh is refused the episode falls on the mesh it has.
 
 Why the resolution is chosen per scenario: a calm, slack loop held until the release falls on the coarse
-resolution within 0.03 m/s of the fine one, at about 30 % of the cost; the coarse pre-release phase of a loop that
-is tight from the start, or that waves move, changes touchdown speed by 0.25-0.31 m/s median
-(``benchmarks/remesh_at_release.py``) for 15-18 % of the episode's cost, the fall there needing the fine
-resolution anyway.
+resolution about as close to the explicit reference fall as on the fine one, at a fraction of the cost; a coarse
+pre-release phase in front of a loop that is tight, moving or in waves changes the touchdown by more than the
+outcome's own sensitivity to the release instant, the fall there needing the fine resolution anyway
+(``benchmarks/remesh_at_release.py``, docs/remesh-at-release.md).
 
 Before the release the implicit integrator may take a coarser step than the scene's
 (:func:`pre_release_step_s`); an advance that diverges with it is repeated at the scene's step
