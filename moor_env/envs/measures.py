@@ -44,6 +44,27 @@ N_SPEC = 5
 
 
 @numba.njit(cache=True, nogil=True)
+def segment_travel_s(node_i, node_vel, seg_i, seg_f, line_i):
+    """The time [s] in which the fastest free node, at its present speed, travels the length of the shortest
+    active segment (a payout line's top segment left out: its length runs down to nothing before it merges);
+    infinite where nothing moves. One pass in a kernel: the env reads it before every coarse advance."""
+    speed2 = 0.0
+    for n in range(node_i.shape[0]):
+        if node_i[n, L.NI_KIND] == L.NODE_FREE:
+            speed2 = max(speed2, node_vel[n, 0] ** 2 + node_vel[n, 1] ** 2 + node_vel[n, 2] ** 2)
+    shortest = math.inf
+    for s in range(seg_i.shape[0]):
+        if seg_i[s, L.SI_ACTIVE] != 0:
+            line = seg_i[s, L.SI_LINE]
+            top = line_i[line, L.LI_SEG_START] + line_i[line, L.LI_NSEG] - 1
+            if line_i[line, L.LI_PAYOUT] == 0 or s != top:
+                shortest = min(shortest, seg_f[s, L.SF_L0])
+    if speed2 == 0.0 or shortest == math.inf:
+        return math.inf
+    return shortest / math.sqrt(speed2)
+
+
+@numba.njit(cache=True, nogil=True)
 def line_summary(node_pos, seg_i, seg_f, line_i, line, material):
     """Over the active segments of ``line``: the lowest node z, the lowest z of nodes on segments of
     ``material`` (inf if none) and the total unstretched length [m].

@@ -28,6 +28,7 @@ import numpy as np
 from moor_env.compile import Model
 from moor_env.config import SceneConfig, line_slack_geometry, tight_line_keys, tight_line_needed
 from moor_env.envs.config import ControlConfig
+from moor_env.envs.measures import segment_travel_s
 from moor_env.physics import layout as L
 from moor_env.physics.integrate import INTEGRATOR_IMPLICIT_EULER
 from moor_env.remesh import remesh_state
@@ -147,18 +148,9 @@ def pre_release_step_s(sim: Simulator, hs_m: float, cfg: ControlConfig) -> float
 
 def travel_step_s(sim: Simulator, segments: float) -> float:
     """The step [s] in which the fastest free node, at its present speed, travels ``segments`` lengths of the
-    shortest active segment (a payout line's top segment left out: its length runs down to nothing before it
-    merges); infinite where nothing moves."""
+    shortest active segment (:func:`~moor_env.envs.measures.segment_travel_s`); infinite where nothing moves."""
     st = sim.state
-    seg_i, line_i = st.seg_i, st.line_i
-    active = seg_i[:, L.SI_ACTIVE] != 0
-    payout = line_i[:, L.LI_PAYOUT] != 0
-    active[(line_i[payout, L.LI_SEG_START] + line_i[payout, L.LI_NSEG] - 1)] = False
-    free = st.node_i[:, L.NI_KIND] == L.NODE_FREE
-    speed2 = float(np.max(np.sum(st.node_vel[free] ** 2, axis=1), initial=0.0))
-    if speed2 == 0.0 or not active.any():
-        return math.inf
-    return segments * float(st.seg_f[active, L.SF_L0].min()) / math.sqrt(speed2)
+    return segments * segment_travel_s(st.node_i, st.node_vel, st.seg_i, st.seg_f, st.line_i)
 
 
 def even_step_s(span_s: float, max_step_s: float) -> float:

@@ -126,11 +126,11 @@ def test_a_fast_moving_line_shortens_the_coarse_step(tiny):
 
 
 def test_calm_loop_moved_by_the_crew_stays_within_its_loads(default_overrides):
-    """The default config in calm water, vessel and winch moved at random (the robustness benchmark's controls,
-    seed 1009: a 0.5 m chain loop that swings at a few m/s). The coarse steps must neither blow up nor load a
-    segment beyond half its breaking load at a step's end, nor raise a line's running maximum tension (what the
-    limit check reads) beyond it (reference: the lines hang at a quarter of it at most; with neither the travel
-    limit nor the end check this episode ends in a blow-up at t = 4 s)."""
+    """The default config in calm water, vessel and winch moved at random (the seeded controls of
+    ``benchmarks/pre_release_step.py``, seed 1009: a 0.5 m chain loop that swings at a few m/s). The coarse steps
+    must neither blow up nor load a segment beyond half its breaking load at a step's end, nor raise a line's
+    running maximum tension (what the limit check reads) beyond it (reference: the lines hang at a quarter of it at
+    most; with neither the travel limit nor the end check this episode ends in a blow-up at t = 4 s)."""
     env = gym.make("moor_env/AnchorRelease-v0", overrides={**default_overrides, "scenario.sea_state_hs_m": 0.0})
     core = env.unwrapped.core
     rng = np.random.default_rng(1009)
