@@ -69,6 +69,11 @@ ROW_BACKUP = ROW_SLOT + len(SlotRecord.FIELDS)
 N_ROWS = ROW_BACKUP + len(STATE_FIELDS)
 # columns of a scene's per-call scalars (float64 table) and results (int64 / float64 tables)
 IN_T, IN_T_END, IN_DT, IN_INTEGRATOR, IN_DETECT, IN_BACKUP = range(6)
+# IN_BACKUP (a job's ``take_backup``): 0 an advance at the scene's step; TAKE_BACKUP a coarse one, the state backed
+# up first; BACKED_UP a later chunk of a coarse one (backed up before its first chunk). Both coarse kinds are
+# checked against the lines' breaking loads, so that chunking a coarse advance never changes its result.
+TAKE_BACKUP = 1
+BACKED_UP = 2
 N_IN = 6
 OUT_STATUS, OUT_STEPS, OUT_FAIL_KIND, OUT_FAIL_INDEX = range(4)
 
@@ -94,7 +99,7 @@ def advance_many(scalars, addresses, out_i, out_t):
         state = record_from_table(StateRecord, a, ROW_STATE)
         slot = record_from_table(SlotRecord, a, ROW_SLOT)
         coarse = scalars[i, IN_BACKUP] != 0.0
-        if coarse:
+        if scalars[i, IN_BACKUP] == TAKE_BACKUP:
             copy_rows(a, ROW_STATE, ROW_BACKUP, N_ROWS - ROW_BACKUP)
         # a coarse advance is checked against the lines' breaking loads: their running maxima before it
         max_tension_before = state.line_f[:, L.LF_MAX_TENSION].copy() if coarse else np.empty(0)
@@ -152,10 +157,11 @@ class _Entry:
             self.records = (model, *self.records[1:])
 
 
-def _job_parts(job: tuple) -> tuple[Simulator, float, bool, float, SlotBuffers | None, bool]:
-    """A job with its optional entries filled in: (simulator, t_end_s, detect, dt_s, buffers, take_backup)."""
+def _job_parts(job: tuple) -> tuple[Simulator, float, bool, float, SlotBuffers | None, int]:
+    """A job with its optional entries filled in: (simulator, t_end_s, detect, dt_s, buffers, take_backup), the
+    last 0, ``TAKE_BACKUP`` (or True) or ``BACKED_UP``."""
     sim, t_stop, detect, step_s, *rest = job
-    return sim, t_stop, detect, step_s, rest[0] if rest else None, bool(rest[1]) if len(rest) > 1 else False
+    return sim, t_stop, detect, step_s, rest[0] if rest else None, int(rest[1]) if len(rest) > 1 else 0
 
 
 def balanced_groups(items: list[tuple[int, tuple]], n_groups: int) -> list[list[tuple[int, tuple]]]:
@@ -220,7 +226,7 @@ class BatchAdvancer:
         entries = []  # keeps every array referenced until the call returns
         for i, job in enumerate(jobs):
             sim, t_stop, detect, step_s, buffers, backup = _job_parts(job)
-            if backup and (buffers is None or buffers.backup is None):
+            if backup == TAKE_BACKUP and (buffers is None or buffers.backup is None):
                 raise ValueError("an advance that takes a backup needs SlotBuffers with a backup state")
             entry = self._entry(sim, buffers)
             entries.append(entry)
@@ -241,7 +247,8 @@ class BatchAdvancer:
     def run(self, jobs: dict[int, tuple]) -> dict[int, tuple[int | None, SimulationDiverged | None]]:
         """Advance ``{slot: (simulator, t_end_s, detect_touchdown, dt_s[, slot_buffers, take_backup])}``: with
         :class:`~moor_env.envs.measures.SlotBuffers` the kernel also measures the state reached and, with
-        ``take_backup``, first copies the state into the buffers' backup.
+        ``take_backup`` (``TAKE_BACKUP`` or True), first copies the state into the buffers' backup; a coarse
+        advance, and a later chunk of one (``BACKED_UP``), is also checked against the lines' breaking loads.
 
         Returns
         -------

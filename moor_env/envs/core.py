@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from moor_env.envs import actuators, measures
-from moor_env.envs.batch import BatchAdvancer
+from moor_env.envs.batch import BACKED_UP, TAKE_BACKUP, BatchAdvancer
 from moor_env.envs.config import EnvConfig
 from moor_env.envs.equilibria import Equilibria
 from moor_env.envs.measures import SlotBuffers
@@ -379,12 +379,12 @@ def run_advance(core: InstallationCore, adv: Advance, chunk_s: float | None = No
     sim = core.sim
     chunk_s = None if chunk_s is None or on_chunk is None else max(chunk_s, adv.dt_s)
     status = L.STATUS_TIME_LIMIT
-    backup = adv.backup  # the state before the first chunk is the one a fallback goes back to
+    backup = TAKE_BACKUP if adv.backup else 0  # the state before the first chunk is the one a fallback goes back to
     while sim.state.t < adv.t_end_s - 0.5 * adv.dt_s:
         t_stop = adv.t_end_s if chunk_s is None else min(sim.state.t + chunk_s, adv.t_end_s)
         job = (sim, t_stop, adv.detect_touchdown, adv.dt_s, core.buffers, backup)
         status, error = core.advancer.run({0: job})[0]
-        backup = False
+        backup = BACKED_UP if adv.backup else 0
         retry = core.fallback(adv, error)
         if retry is not None:
             return run_advance(core, retry, chunk_s, on_chunk)

@@ -46,8 +46,9 @@ N_SPEC = 5
 @numba.njit(cache=True, nogil=True)
 def segment_travel_s(node_i, node_vel, seg_i, seg_f, line_i):
     """The time [s] in which the fastest free node, at its present speed, travels the length of the shortest
-    active segment (a payout line's top segment left out: its length runs down to nothing before it merges);
-    infinite where nothing moves. One pass in a kernel: the env reads it before every coarse advance."""
+    active segment (a payout line's top segment left out: it shortens to half its nominal length before it
+    merges, whatever the mesh); infinite where nothing moves. One pass in a kernel: the env reads it before every
+    coarse advance."""
     speed2 = 0.0
     for n in range(node_i.shape[0]):
         if node_i[n, L.NI_KIND] == L.NODE_FREE:

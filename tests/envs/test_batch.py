@@ -90,6 +90,28 @@ def test_backup_holds_the_state_before_the_advance(hanging_sim):
     assert not np.array_equal(sim.state.node_pos, before.node_pos)
 
 
+def test_coarse_advances_and_their_later_chunks_are_checked_against_breaking_loads(hanging_sim):
+    """With the breaking loads lowered below the hanging tension and the running maxima cleared, an advance
+    taking a backup (``TAKE_BACKUP``) and a later chunk of one (``BACKED_UP``, no backup taken) both fail with
+    ``tension above breaking load``; the backup is written only by the first; an advance at the scene's step
+    (0) is not checked."""
+    from moor_env.envs.batch import BACKED_UP, TAKE_BACKUP
+    from moor_env.envs.measures import SlotBuffers
+    from moor_env.physics import layout as L
+
+    sim = hanging_sim
+    sim.model.mat_f[:, L.MF_MBL] = 1.0  # [N]
+    buffers = SlotBuffers([-1] * 5, sim.state)
+    start = sim.state.copy()
+    for mode, fails in ((TAKE_BACKUP, True), (BACKED_UP, True), (0, False)):
+        buffers.backup.node_pos[:] = 0.0
+        sim.state.line_f[:, L.LF_MAX_TENSION] = 0.0
+        status, error = BatchAdvancer(1).run({0: (sim, sim.state.t + 0.1, False, sim.dt, buffers, mode)})[0]
+        assert (error is not None and error.reason == "tension above breaking load") == fails, (mode, error)
+        assert np.array_equal(buffers.backup.node_pos, start.node_pos) == (mode == TAKE_BACKUP), mode
+        start = sim.state.copy()
+
+
 def test_backup_needs_buffers_with_a_backup_state(hanging_sim):
     from moor_env.envs.measures import SlotBuffers
 

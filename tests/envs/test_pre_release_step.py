@@ -105,24 +105,27 @@ def test_a_coarse_advance_raising_a_tension_above_the_breaking_load_is_repeated_
 
 
 def test_a_fast_moving_line_shortens_the_coarse_step(tiny):
-    """A node at 100 m/s may travel half the shortest segment per step (``pre_release_travel_segments``): the
-    advance takes the fewest equal steps within that, never below the scene's step; at rest, or without the
-    limit, the configured coarse step."""
+    """A node at 30 m/s may travel half the shortest segment (5 m) per step (``pre_release_travel_segments``):
+    the advance takes the fewest equal steps within that (3 of 0.083 s), never below the scene's step (at
+    300 m/s); at rest, or without the limit, the configured coarse step."""
     limited = _tiny(tiny, pre_release_dt_s=0.13, interval_s=0.25, pre_release_travel_segments=0.5)
     free = _tiny(tiny, pre_release_dt_s=0.13, interval_s=0.25, pre_release_travel_segments=None)
     for env in (limited, free):
         env.reset(seed=3, options={"sea_state_hs_m": 0.0})
     assert limited.unwrapped.core.begin_step(HOLD).dt_s == 0.125  # at rest
-    for env in (limited, free):
-        env.reset(seed=3, options={"sea_state_hs_m": 0.0})
-        st = env.unwrapped.core.sim.state
-        node = int(np.nonzero(st.node_i[:, L.NI_KIND] == L.NODE_FREE)[0][0])
-        st.node_vel[node] = (0.0, 0.0, -100.0)
-    core = limited.unwrapped.core
-    st = core.sim.state
-    shortest = st.seg_f[st.seg_i[:, L.SI_ACTIVE] != 0, L.SF_L0].min()
-    assert core.begin_step(HOLD).dt_s == even_step_s(0.25, max(0.5 * shortest / 100.0, core.sim.dt))
-    assert free.unwrapped.core.begin_step(HOLD).dt_s == 0.125
+    for speed_m_s in (30.0, 300.0):
+        for env in (limited, free):
+            env.reset(seed=3, options={"sea_state_hs_m": 0.0})
+            st = env.unwrapped.core.sim.state
+            node = int(np.nonzero(st.node_i[:, L.NI_KIND] == L.NODE_FREE)[0][0])
+            st.node_vel[node] = (0.0, 0.0, -speed_m_s)
+        core = limited.unwrapped.core
+        st = core.sim.state
+        shortest = st.seg_f[st.seg_i[:, L.SI_ACTIVE] != 0, L.SF_L0].min()
+        travel = 0.5 * shortest / speed_m_s
+        assert (travel > core.sim.dt) == (speed_m_s == 30.0)
+        assert core.begin_step(HOLD).dt_s == even_step_s(0.25, max(travel, core.sim.dt))
+        assert free.unwrapped.core.begin_step(HOLD).dt_s == 0.125
 
 
 def test_calm_loop_moved_by_the_crew_stays_within_its_loads(default_overrides):
@@ -134,7 +137,8 @@ def test_calm_loop_moved_by_the_crew_stays_within_its_loads(default_overrides):
     env = gym.make("moor_env/AnchorRelease-v0", overrides={**default_overrides, "scenario.sea_state_hs_m": 0.0})
     core = env.unwrapped.core
     rng = np.random.default_rng(1009)
-    rng.integers(25, 56)  # the benchmark draws its release step first
+    rng.integers(25, 56)  # the benchmark draws its release step and a first pair of rates before the episode
+    rng.uniform(-1.0, 1.0, 2)
     env.reset(seed=1009)
     largest = 0.0
     for k in range(20):
