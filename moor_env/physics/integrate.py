@@ -26,8 +26,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.anchor import body_point, rotate_axis
 from moor_env.physics.contact_broadphase import note_moved, prepare_near
@@ -243,23 +241,18 @@ def end_state_status(model, state, max_strain, worst_seg, max_tension_before):
         return STATUS_NONFINITE, FAIL_SEGMENT, worst_seg
     if max_strain > model.env_f[EF_STRAIN_LIMIT]:
         return STATUS_STRAIN_LIMIT, FAIL_SEGMENT, worst_seg
-    n_lines = max_tension_before.shape[0]
-    if n_lines == 0:
-        return STATUS_RUNNING, FAIL_NONE, -1
     seg_i, seg_tension, mat_f, line_f = state.seg_i, state.seg_tension, model.mat_f, state.line_f
-    breaking = np.full(n_lines, np.inf)
-    for s in range(seg_i.shape[0]):
-        if seg_i[s, SI_ACTIVE] != 0:
-            line = seg_i[s, SI_LINE]
-            breaking[line] = min(breaking[line], mat_f[seg_i[s, SI_MAT], MF_MBL])
-    for line in range(n_lines):
-        if line_f[line, LF_MAX_TENSION] > breaking[line] >= max_tension_before[line]:
-            worst, ratio = -1, -1.0
-            for s in range(seg_i.shape[0]):
-                if seg_i[s, SI_ACTIVE] != 0 and seg_i[s, SI_LINE] == line:
-                    r = seg_tension[s] / mat_f[seg_i[s, SI_MAT], MF_MBL]
-                    if r > ratio:
-                        worst, ratio = s, r
+    for line in range(max_tension_before.shape[0]):
+        if not line_f[line, LF_MAX_TENSION] > max_tension_before[line]:
+            continue  # the advance did not raise this line's maximum
+        breaking, worst, ratio = math.inf, -1, -1.0
+        for s in range(seg_i.shape[0]):
+            if seg_i[s, SI_ACTIVE] != 0 and seg_i[s, SI_LINE] == line:
+                mbl = mat_f[seg_i[s, SI_MAT], MF_MBL]
+                breaking = min(breaking, mbl)
+                if seg_tension[s] / mbl > ratio:
+                    worst, ratio = s, seg_tension[s] / mbl
+        if line_f[line, LF_MAX_TENSION] > breaking >= max_tension_before[line]:
             return STATUS_BREAKING_LOAD, FAIL_SEGMENT, worst
     return STATUS_RUNNING, FAIL_NONE, -1
 
