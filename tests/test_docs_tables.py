@@ -17,7 +17,8 @@ from _docs import read_block  # noqa: E402
 BENCHMARKS = ("bench_drop", "bench_env", "bench_implicit_step", "bench_plan_v1", "bench_rllib", "contact_convergence",
               "contact_cost", "contact_crosscheck", "contact_episodes", "fall_reference",
               "fall_step", "mbl_exceedance", "positioning_quasi_static", "pre_release_step", "release_v1_evaluation",
-              "remesh_at_release", "rl_evaluation", "robustness", "speed_vs_error", "statics", "statics_tail")
+              "remesh_at_release", "rl_evaluation", "rl_reproduction", "robustness", "speed_vs_error", "statics",
+              "statics_tail")
 
 
 @pytest.mark.parametrize("name", BENCHMARKS)

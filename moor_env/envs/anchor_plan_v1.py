@@ -109,7 +109,8 @@ class AnchorPlanV1Env(PlanFrames, gym.Env):
     ## Episode End
 
     Every step terminates: at touchdown, after ``simulation.max_fall_time_s`` without touchdown, on a numerical
-    failure, or at once when the chosen geometry has no equilibrium. Never truncated.
+    failure, or at once when the chosen geometry has no equilibrium or the static solver does not reach it
+    (``info["failure"]`` starts with ``no equilibrium`` or ``statics not converged``). Never truncated.
 
     ## Arguments
 
@@ -181,8 +182,11 @@ class AnchorPlanV1Env(PlanFrames, gym.Env):
         record = InstallationRecord(None, self.measures["required_speed_m_s"])
         try:
             self._install(targets, info, record)
-        except (ConfigError, StaticsNotConverged) as exc:
+        except ConfigError as exc:
             record.failure = f"no equilibrium: {exc}"
+            info["sim_status"] = record.failure
+        except StaticsNotConverged as exc:  # the solver's failure, not a geometry shown to have no equilibrium
+            record.failure = f"statics not converged: {exc}"
             info["sim_status"] = record.failure
         info["failure"] = record.failure
         result = outcome(record, self.cfg)
@@ -196,7 +200,8 @@ class AnchorPlanV1Env(PlanFrames, gym.Env):
         Raises
         ------
         ConfigError, StaticsNotConverged
-            Where the geometry has no equilibrium (from :meth:`InstallationCore.start`).
+            Where the geometry has no equilibrium, or the static solver does not reach it (from
+            :meth:`InstallationCore.start`).
         """
         core = self.core
         adv = core.start(episode_scenario(self.site, targets))

@@ -22,7 +22,7 @@ from moor_env.envs.plan_outcome import (
     soft_minimum,
 )
 from moor_env.envs.site import SITE_OBS_NAMES, draw_site, site_from_observation, site_measures
-from moor_env.errors import ConfigError
+from moor_env.errors import ConfigError, StaticsNotConverged
 
 ENV_ID = "moor_env/AnchorPlan-v1"
 CALM = {"sea_state_hs_m": 0.0, "current_scale": 0.0, "water_depth_m": 500.0}
@@ -178,3 +178,18 @@ def test_plan_without_equilibrium_fails_cleanly(env, cfg):
     assert terminated and not truncated and reward == 0.0 and not info["success"]
     assert info["failure"].startswith("no equilibrium") and info["touchdown"] is None
     assert info["margins"]["speed"] is None and info["margins"]["tension"] is None
+
+
+def test_unconverged_statics_is_not_called_no_equilibrium(env, monkeypatch):
+    """A static solve that stops short of its tolerance is the solver's failure, not a geometry shown to have no
+    equilibrium: the episode ends at once as a failure whose ``failure`` says so."""
+    env.reset(seed=0, options=CALM)
+
+    def stalls(*args, **kwargs):
+        raise StaticsNotConverged("static equilibrium not reached after 2000 iterations", 4.9)
+
+    monkeypatch.setattr(env.unwrapped.core, "start", stalls)
+    obs, reward, terminated, truncated, info = env.step(np.zeros(5, np.float32))
+    assert terminated and not truncated and reward == 0.0 and not info["success"]
+    assert info["failure"].startswith("statics not converged: static equilibrium not reached")
+    assert info["sim_status"] == info["failure"] and info["touchdown"] is None
