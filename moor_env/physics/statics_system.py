@@ -44,6 +44,7 @@ from moor_env.physics.statics_contact import (
     add_contact_blocks,
     contact_geometry,
     predict_contact,
+    release_pulling,
 )
 from moor_env.physics.statics_elimination import eliminate
 from moor_env.physics.tree import OR_EFF
@@ -263,6 +264,7 @@ def solve_step(inv_tau2, nq, body_node, basis, res_body, dq, model, state, scrat
     contact = (body_node >= 0 and model.contact_f[L.CF_ON] != 0.0
                and contact_geometry(basis, model, state, geo, cand, cin) > 0)
     solves = 0
+    released = False
     while True:
         _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling, orow, blocks[0])
         if contact:
@@ -275,6 +277,9 @@ def solve_step(inv_tau2, nq, body_node, basis, res_body, dq, model, state, scrat
         changed = _predict_seabed(body_node, state, seabed, node_down, orow, solves == 1)
         if contact:
             changed += predict_contact(state, dq, geo, cand, cin, solves == 1)
+            if changed == 0 and not released:  # once per step: the set settled, none of it may pull
+                released = True
+                changed = release_pulling(state, dq, geo, cand, cin)
         if changed == 0:
             return solves
 

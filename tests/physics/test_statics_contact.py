@@ -30,6 +30,14 @@ RESTING = [
     {"water_depth_m": 1440.162, "vessel_spacing_m": 21.986, "mooring_line_length_m": 1401.477,
      "vertical_chain_length_m": 6.53, "drop_height_m": 89.935, "current_scale": 0.33,
      "current_direction_deg": 207.511, "anchor_mass_scale": 1.059, "fidelity": "default"},
+    # an AnchorPlan-v1 held-out site's random plan: 119 m apart in 580 m, a 7.7 m vertical chain, strong current,
+    # the env's segment lengths; the chain loop rests over the back end's rim (release_pulling)
+    {"water_depth_m": 580.034, "vessel_spacing_m": 119.044, "mooring_line_length_m": 703.649,
+     "vertical_chain_length_m": 7.684, "drop_height_m": 35.921, "current_scale": 1.117,
+     "current_direction_deg": 64.99, "anchor_mass_scale": 1.018, "fidelity": "fast",
+     "discretization.fit_to_geometry": False, "discretization.loop_chain_segment_m": 1.0,
+     "discretization.vertical_chain_segment_m": 1.0, "discretization.fibre_segment_m": 50.0,
+     "discretization.wire_segment_m": 100.0},
 ]
 
 
@@ -275,3 +283,25 @@ def test_failed_solve_is_repeated_with_the_contact_only_where_a_line_met_the_anc
         with pytest.raises(StaticsNotConverged, match="stalled"):
             statics.solve_equilibrium(sim, method="newton", progress=False)
         assert calls == [False]
+
+
+def test_a_contact_that_would_pull_leaves_the_set():
+    """Once the predicted set has settled, a contact outside the anchor now and still outside at the step's end
+    leaves it (its gap term, k d n with d < 0, would pull the line onto the anchor); one inside now, one the step
+    carries inside and one not in the set are left as they are."""
+    from moor_env.physics.statics_contact import G_DEPTH, G_NORMAL, release_pulling
+    from moor_env.physics.statics_system import new_scratch
+    from moor_env.simulator import Simulator
+
+    _, state = Simulator(compile_scene(load_scene("gjoa-500", {"fidelity": "fast"}))).records()
+    nn, ns = state.node_pos.shape[0], state.seg_i.shape[0]
+    geo, cand, cin = new_scratch(nn, ns)[4:7]
+    state.node_acc[:] = 0.0
+    rows = np.arange(4)
+    cand[rows] = 1
+    cin[rows] = (1, 1, 1, 0)
+    geo[rows, G_DEPTH] = (-1e-3, 1e-3, -1e-3, -1e-3)  # outside, inside, outside, outside [m]
+    geo[rows, G_NORMAL] = 1.0
+    state.node_acc[2, 0] = -2e-3  # the step carries row 2 2 mm inside
+    assert release_pulling(state, np.zeros(5), geo, cand, cin) == 1
+    assert list(cin[rows]) == [0, 1, 1, 0]
