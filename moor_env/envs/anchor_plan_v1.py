@@ -37,8 +37,9 @@ class AnchorPlanV1Env(PlanFrames, gym.Env):
     geometry is solved fresh (:func:`moor_env.solve_statics`), the waves are ramped in over ``control.warmup_s``,
     the vessels hold station until the chosen phase after the next up-crossing of the installation vessel's heave,
     the anchor is released and falls to touchdown. The geometry is set directly (the DP, winches and wire winch
-    are not simulated moving there). A geometry without an equilibrium (a line too short, fibre on the seabed)
-    ends the episode as a failure, with the solver's reason in ``info["failure"]``.
+    are not simulated moving there). A geometry without an equilibrium (a line too short, fibre on the seabed),
+    or one whose static solve does not converge, ends the episode as a failure, with the solver's reason in
+    ``info["failure"]``.
 
     The lever ranges and their sources (Landhaug 2015, "Dynamic Simulation of Dart Anchor Installation", seed 003,
     by chapter; the Gjoa field figures after Lieng et al. 2010, its section 3.3):

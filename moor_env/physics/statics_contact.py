@@ -355,11 +355,12 @@ def release_pulling(state, dq, geo, cand, cin):
     """Let go of the contacts in the set that are outside the anchor now and still outside at the step's end
     (nodes in ``state.node_acc``, the anchor in ``dq``); returns how many.
 
-    Why: such a contact enters the step's system with the linear law from its gap, k d n with d < 0, which pulls
-    the line onto the anchor. Kept in by the rule that lets no contact go after the first prediction (no cycling),
+    Why: such a contact's linearised force at the step's end, k (d - move) n with d - move <= 0, pulls the line
+    onto the anchor. Kept in the set by the rule that lets no contact go after the first prediction (no cycling),
     two of them can balance a third that pushes a chain off a rim, and the step comes out zero while the residual
-    stays: on a scene of a chain loop resting over the back end's rim in strong current, the solve stood still for
-    2000 iterations at a residual of 20 node weights."""
+    stays (a chain loop resting over the back end's rim in strong current: a residual of 20 node weights that no
+    step reduces). A contact inside now stays: its spring holds a real load, and the step's prediction only
+    says where the linear model would carry it."""
     changed = 0
     for n in range(geo.shape[0]):
         if cand[n] == 0 or cin[n] == 0 or geo[n, G_DEPTH] >= 0.0:

@@ -51,7 +51,7 @@ from moor_env.physics.tree import OR_EFF
 
 SLACK_STIFFNESS = 1e-6  # least stiffness of a segment in K, as a fraction of EA / l0 (keeps K regular)
 SLACK_PATIENCE = 3  # iterations a segment is slack before K lets it go
-ACTIVE_SET_ROUNDS = 8  # solves per step at most while the predicted seabed contacts change
+ACTIVE_SET_ROUNDS = 8  # solves per step at most while the predicted seabed and line-anchor contacts change
 
 
 @jit_no_refcount
@@ -256,8 +256,9 @@ def _start_sets(model, state, seg_age, taut, node_down):
 @jit_step
 def solve_step(inv_tau2, nq, body_node, basis, res_body, dq, model, state, scratch, tree, orow, seg_age):
     """The step at the present state (its loads evaluated) into ``state.node_acc`` (free nodes) and ``dq`` (the
-    anchor), solved again while the contacts it predicts change; returns the number of solves. ``scratch``: the
-    arrays of :func:`new_scratch`."""
+    anchor), solved again while the contacts it predicts change, and once more where, with the contacts settled,
+    line-anchor contacts that would pull leave the set (``statics_contact.release_pulling``); at most
+    ``ACTIVE_SET_ROUNDS`` solves, their number returned. ``scratch``: the arrays of :func:`new_scratch`."""
     dmat, coupling, taut, node_down, geo, cand, cin, bmat, cmat, coupled, body_a, body_r, blocks = scratch
     seabed = -model.env_f[L.EF_DEPTH]
     _start_sets(model, state, seg_age, taut, node_down)

@@ -1,7 +1,8 @@
 """The line-anchor contact in the static problem (moor_env.physics.statics_contact and its use by the statics).
 
 Reference scenes: gjoa-500 with the mooring line's loop hanging beside the vertical chain (vessels 0 m apart; a very
-slack line 30 m apart; scenes drawn by the statics benchmark): the loop rests against the anchor's shaft. The
+slack line 30 m apart; scenes drawn by the statics benchmark; an AnchorPlan-v1 held-out site's random plan with the
+env's segment lengths): the loop rests against the anchor's shaft or over its back end's rim. The
 residual is the dynamic model's own loads at rest, contact included (1e-4 of every node's weight, the solver's
 tolerance).
 """
@@ -287,9 +288,10 @@ def test_failed_solve_is_repeated_with_the_contact_only_where_a_line_met_the_anc
 
 def test_a_contact_that_would_pull_leaves_the_set():
     """Once the predicted set has settled, a contact outside the anchor now and still outside at the step's end
-    leaves it (its gap term, k d n with d < 0, would pull the line onto the anchor); one inside now, one the step
-    carries inside and one not in the set are left as they are."""
-    from moor_env.physics.statics_contact import G_DEPTH, G_NORMAL, release_pulling
+    leaves it (its linearised force there would pull the line onto the anchor); one inside now (even where the step
+    carries it out), one the step carries inside and one not in the set are left as they are; a segment's row
+    (its deepest point moved by its nodes' shares) is judged alike."""
+    from moor_env.physics.statics_contact import G_DEPTH, G_NORMAL, G_SHARE, release_pulling
     from moor_env.physics.statics_system import new_scratch
     from moor_env.simulator import Simulator
 
@@ -297,11 +299,17 @@ def test_a_contact_that_would_pull_leaves_the_set():
     nn, ns = state.node_pos.shape[0], state.seg_i.shape[0]
     geo, cand, cin = new_scratch(nn, ns)[4:7]
     state.node_acc[:] = 0.0
-    rows = np.arange(4)
+    seg = int(np.nonzero(state.seg_i[:, L.SI_ACTIVE])[0][0])
+    a, b = state.seg_i[seg, L.SI_A], state.seg_i[seg, L.SI_B]
+    rows = np.array([a, b, 2, 3, nn + seg])
+    rows[2:4] = [n for n in range(nn) if n not in (a, b)][:2]
     cand[rows] = 1
-    cin[rows] = (1, 1, 1, 0)
-    geo[rows, G_DEPTH] = (-1e-3, 1e-3, -1e-3, -1e-3)  # outside, inside, outside, outside [m]
+    cin[rows] = (1, 1, 1, 0, 1)
+    geo[rows, G_DEPTH] = (-1e-3, 1e-3, -1e-3, -1e-3, -1e-3)  # outside, inside, outside, outside, outside [m]
     geo[rows, G_NORMAL] = 1.0
-    state.node_acc[2, 0] = -2e-3  # the step carries row 2 2 mm inside
+    geo[nn + seg, G_NORMAL] = -1.0  # the segment's normal opposes its node b's move
+    geo[nn + seg, G_SHARE] = 0.25  # node a's share of its deepest point
+    state.node_acc[b, 0] = 2e-3  # carries row b (inside now) 1 mm outside, the segment's point 1.5 mm inside
+    state.node_acc[rows[2], 0] = -2e-3  # carries row 2 1 mm inside
     assert release_pulling(state, np.zeros(5), geo, cand, cin) == 1
-    assert list(cin[rows]) == [0, 1, 1, 0]
+    assert list(cin[rows]) == [0, 1, 1, 0, 1]
