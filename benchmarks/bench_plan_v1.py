@@ -140,6 +140,7 @@ def summarize(cost: dict[str, list[dict]], pos: list[dict]) -> dict:
         cpu = np.array([r["cpu_s"] for r in rows])
         out["cost"][label] = {"episodes": len(rows), "cpu_s_median": float(np.median(cpu)),
                               "cpu_s_mean": float(cpu.mean()), "cpu_s_p95": float(np.quantile(cpu, 0.95)),
+                              # refused before the fall (REFUSED); the key keeps its name for the committed runs
                               "no_equilibrium": sum(str(r["failure"]).startswith(REFUSED) for r in rows),
                               "success": sum(r["success"] for r in rows)}
     out["positioning"] = {case: _differences(pos, case) for case in ("positioned", "later")}
