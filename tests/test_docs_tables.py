@@ -18,7 +18,7 @@ BENCHMARKS = ("bench_drop", "bench_env", "bench_implicit_step", "bench_plan_v1",
               "contact_cost", "contact_crosscheck", "contact_episodes", "fall_reference",
               "fall_step", "mbl_exceedance", "positioning_quasi_static", "pre_release_step", "release_v1_evaluation",
               "remesh_at_release", "rl_evaluation", "rl_reproduction", "robustness", "speed_vs_error", "statics",
-              "statics_tail")
+              "statics_env_resolution", "statics_tail")
 
 
 @pytest.mark.parametrize("name", BENCHMARKS)
