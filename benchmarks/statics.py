@@ -74,9 +74,13 @@ CLOCK = time.process_time
 
 
 def _warm_up() -> None:
+    """Compile (or load from the cache) the kernels before anything is timed: Newton's method on every preset, and
+    the relaxation solver, whose reference runs in worker processes under a wall-time limit (a worker that had to
+    compile its kernels would spend much of that limit on them)."""
     for preset in PRESETS:
         for current in (0.0, 1.0):
             solve_statics(load_scene("gjoa-500", {"fidelity": preset, "current_scale": current}), progress=False)
+    solve_statics(load_scene("vertical-chain"), progress=False, method="relaxation")
 
 
 def run_scene(overrides: dict) -> dict:
@@ -218,6 +222,19 @@ def _resting_segments(records: list[dict]) -> dict:
             "deeper_than_5cm": int(np.sum(depth > 0.05))}
 
 
+def _by_contact_text(records: list[dict]) -> str:
+    """The converged scenes' solve times split by whether a line rests on the anchor, in words."""
+    done = [r for r in records if r["outcome"] == "converged"]
+    parts = []
+    for label, rows in (("every line clear of the anchor", [r for r in done if not _resting(r)]),
+                        ("a line resting on it", [r for r in done if _resting(r)])):
+        q = _quantiles(np.array([r["solve_s"] for r in rows]) * 1e3)
+        if q:
+            parts.append(f"with {label} ({len(rows)}), {q['median']:.1f} ms median, {q['p90']:.1f} ms p90, "
+                         f"{q['p99']:.1f} ms p99, {q['max']:.0f} ms at most")
+    return "Converged scenes " + "; ".join(parts) + "." if parts else ""
+
+
 def _quantiles(ms: np.ndarray) -> dict:
     if ms.size == 0:
         return {}
@@ -319,7 +336,9 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
                f"for one equilibrium solve), in the same process."
                if mp.get("scenes") else "No MoorPy comparison in this run.")
     line = run_line(result, COMMAND) + (CLOCK_TEXT if cpu_timed else "")
-    doc = (f"{main}\n\nScenes refused or not solved by Newton's method, by cause (time from the compiled scene, "
+    split = _by_contact_text(result["records"])
+    doc = (f"{main}\n\n" + (f"{split}\n\n" if split else "")
+           + "Scenes refused or not solved by Newton's method, by cause (time from the compiled scene, "
            f"timed once: a rare path's kernel compiling on its first use would count):\n\n{causes}\n\n{fb_text}\n\n"
            f"{cmp_text}\n\n{mp_text}\n\n" + (f"{seg_text}\n\n" if seg_text else "") + line)
     a = s["all"]

@@ -15,7 +15,7 @@ Where the scene models the lines' contact with the anchor's body (``contact_mode
 problem (``physics/statics_contact.py``): a loop that hangs beside the vertical chain rests against the anchor and
 pushes it aside. The lines are solved without it first (:func:`solve_equilibrium`); from a state with a line
 through the anchor (that equilibrium, or the first guess), the first stage is solved with the contact's stiffness
-raised in decades from a hundred-thousandth of its own (``statics_stages.CONTACT_RAMP``), so that the line is
+raised in steps from a hundred-thousandth of its own (``statics_stages.CONTACT_RAMP``), so that the line is
 pushed out gradually and the loop follows.
 
 All of it runs on the tension-only law smoothed at strain scale ``SMOOTHING_FINAL`` (it differs from the exact law
