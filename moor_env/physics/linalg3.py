@@ -12,9 +12,9 @@ segment's axial stiffness EA / l0 (7e9 N/m for 0.25 m of 142 mm chain) beside th
 line near zero tension (1-100 N/m), and the adjugate's rounding error in the stiff direction grows with the
 square of that ratio. The elimination multiplies that error by (EA / l0)^2 into the parent's block: at a ratio of
 7e7 (100 N/m) some 1e7-1e8 N/m, as much as the line's own axial stiffness over its length. At a chain loop
-hanging in a U the step then came out with the wrong sign at the loop's bottom (a linear residual of a third of
-the right-hand side), and Newton's method wandered for hundreds of iterations near the solution. Pivoted
-elimination keeps the error proportional to the ratio (tens of N/m there).
+hanging in a U, the adjugate turns the step at the loop's bottom around (a linear residual of a third of the
+right-hand side), and Newton's method wanders for hundreds of iterations near the solution. Pivoted elimination
+keeps the error proportional to the ratio (tens of N/m there).
 
 Symmetric matrices are passed as their six entries (xx, yy, zz, xy, xz, yz).
 """

@@ -299,7 +299,7 @@ def test_hard_scenes_converge(overrides):
     assert _residual_ratio(static) < 1e-4
 
 
-# a chain loop hanging in a U 46 m below the anchor's tip, its bottom bent over a few 0.25 m segments at 800 N,
+# a chain loop hanging in a U 47 m below the anchor's tip, its bottom bent over a few 0.25 m segments at 0.8-1.8 kN,
 # one segment over the anchor's back end
 U_LOOP = {"water_depth_m": 737.83, "vessel_spacing_m": 30.82, "mooring_line_length_m": 870.85,
           "vertical_chain_length_m": 44.41, "drop_height_m": 63.5, "current_scale": 0.317,
@@ -311,7 +311,7 @@ def test_a_chain_loop_in_a_u_converges_from_the_first_guess():
     beside the chain's axial stiffness (7e9 N/m, ``physics/linalg3.py``), so that Newton's method converges from
     the first guess, the drop-height corrections included, within 200 iterations and to the residual tolerance
     (1e-4 of every node's weight). With the 3x3 blocks inverted by the adjugate this scene needs the coarse
-    starts and about a thousand iterations."""
+    starts and several hundred iterations."""
     static = solve_statics(load_scene("gjoa-500", U_LOOP), progress=False, method="newton")
     assert static.iterations <= 200
     assert _residual_ratio(static) < 1e-4
