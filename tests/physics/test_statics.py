@@ -307,7 +307,7 @@ U_LOOP = {"water_depth_m": 737.83, "vessel_spacing_m": 30.82, "mooring_line_leng
 
 
 def test_a_chain_loop_in_a_u_converges_from_the_first_guess():
-    """The static step's block elimination keeps a chain loop's transverse stiffness at its bottom (about 1e3 N/m)
+    """The static step's block elimination keeps a chain loop's transverse stiffness at its bottom (T / l, a few kN/m)
     beside the chain's axial stiffness (7e9 N/m, ``physics/linalg3.py``), so that Newton's method converges from
     the first guess, the drop-height corrections included, within 200 iterations and to the residual tolerance
     (1e-4 of every node's weight). With the 3x3 blocks inverted by the adjugate this scene needs the coarse
