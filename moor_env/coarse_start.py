@@ -125,10 +125,11 @@ class CoarseStart:
             raise fibre_refusal(self.sim, f"{resting} of its nodes on it in the equilibrium of the scene at the "
                                           f"{self.preset} preset's segment lengths where finer")
 
-    def start(self, progress: bool):
+    def start(self, progress: bool, softened_only: bool = False):
         """Solve the fine lines from the coarse equilibrium mapped onto them; the report (iterations of both
         solves), or None where that start is not to be had (lines no finer than the coarse ones, the coarse scene
-        unsolved, lines that do not map) or Newton's method does not converge from it.
+        unsolved, lines that do not map) or Newton's method does not converge from it. ``softened_only``: the
+        fine lines get the softened try only (``solve_equilibrium``), where a nearer start follows.
 
         Raises
         ------
@@ -154,7 +155,7 @@ class CoarseStart:
         budget = MAX_ITERATIONS if refusal is None else FIRST_TRY_ITERATIONS
         try:
             report = solve_equilibrium(sim, warm=True, progress=progress, method="newton", mapped=True,
-                                       max_iter=budget)
+                                       max_iter=budget, softened_only=softened_only)
         except MoorEnvError as exc:
             if refusal is not None and isinstance(exc, (StaticsNotConverged, SimulationDiverged)):
                 if certain:

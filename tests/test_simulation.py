@@ -430,3 +430,73 @@ def test_mapped_start_converges_with_the_slack_law_softened_first(monkeypatch):
     assert _largest_residual_ratio(result.simulator) < 1e-4
     assert result.simulator.env_f[L.EF_SLACK_SMOOTHING] == 0.0  # the rounding ends with the solve
     assert softened and softened[-1] is not None and softened[-1].method == "newton"
+
+
+# The statics benchmark's scene 791 (seed 0), as drawn: default lines, a long mooring line whose fibre rope the
+# coarse equilibrium rests on the seabed (8 nodes) with the anchor tip 1.2 cm from its drop height before the
+# drop-height corrections.
+FIBRE_RESTING_BEFORE_CORRECTIONS = {"water_depth_m": 1210.8661203175666, "vessel_spacing_m": 125.86818232930739,
+                                    "mooring_line_length_m": 1500.5177265448333,
+                                    "vertical_chain_length_m": 15.372646723259168, "drop_height_m": 76.66947682093799,
+                                    "current_scale": 0.2589837319400325, "current_direction_deg": 159.37689695691708,
+                                    "anchor_mass_scale": 0.9096028223065737, "fidelity": "default"}
+
+
+def test_coarse_equilibrium_resting_its_fibre_skips_the_drop_height_corrections():
+    """Reference: the coarse compile's equilibrium with its drop-height corrections (the tip within 1 mm of its drop
+    height) rests two or more fibre nodes on the seabed. The coarse start's solve keeps the equilibrium before the
+    corrections (the tip still more than 1 mm off, fewer iterations), and it rests as many fibre nodes."""
+    from moor_env import compile_scene
+    from moor_env.coarse_start import REFUSED_FROM_NODES, coarse_keys
+    from moor_env.physics.statics_checks import fibre_on_seabed
+    from moor_env.simulation import _adjust_to_drop_height, _coarse_solve, _hanging_equilibrium
+
+    scene = load_scene("gjoa-500", FIBRE_RESTING_BEFORE_CORRECTIONS)
+    keys = coarse_keys(compile_scene(scene))
+    coarse = compile_scene(scene.model_copy(update={"discretization": scene.discretization.model_copy(update=keys)}))
+    target_z = -scene.environment.water_depth_m + scene.installation.drop_height_m
+    corrected = _hanging_equilibrium(coarse, 1e-3, False, "newton", checks=False)
+    assert abs(_adjust_to_drop_height(corrected.simulator, target_z)) < 1e-3
+    resting = fibre_on_seabed(corrected.simulator)[0]
+    assert resting >= REFUSED_FROM_NODES
+    settled = _coarse_solve(coarse, progress=False)
+    assert abs(_adjust_to_drop_height(settled.simulator, target_z)) > 1e-3
+    assert settled.iterations < corrected.iterations
+    assert fibre_on_seabed(settled.simulator)[0] == resting
+
+
+# The statics benchmark's scene 953 (seed 0), as drawn: the fast preset fitted to a 0.5 m loop chain, the loop
+# against the anchor in strong current. Like the scenes above, which start converges depends on the last digits of
+# the solve.
+FAST_START_BEFORE_THE_MIDDLE = {"water_depth_m": 987.0481212000599, "vessel_spacing_m": 148.5188510787858,
+                                "mooring_line_length_m": 1112.692231130019, "vertical_chain_length_m": 9.01042375360517,
+                                "drop_height_m": 54.260466755347494, "current_scale": 1.3421137143341721,
+                                "current_direction_deg": 76.76771449064344, "anchor_mass_scale": 0.9268851241965204,
+                                "fidelity": "fast"}
+
+
+def test_fast_start_gets_its_softened_try_only_where_the_middle_start_follows(monkeypatch):
+    """Reference: the solver's tolerance on the discrete model's residual (1e-4 of each node's weight). The fine
+    lines' solve from the fast preset's equilibrium, with the default preset's start to follow, makes the softened
+    try only (no full-budget solve without the rounding), and ``solve_statics`` converges on this scene through the
+    default preset's start."""
+    from moor_env import Simulator, compile_scene
+    from moor_env.coarse_start import MIDDLE_PRESET, coarse_keys
+    from moor_env.physics import statics
+
+    model = compile_scene(load_scene("gjoa-500", FAST_START_BEFORE_THE_MIDDLE))
+    assert coarse_keys(model, MIDDLE_PRESET) is not None
+    softened = []
+    solve = statics._by_newton
+
+    def spy(sim, start, method, args):
+        if sim.model is model:  # the fine lines' solves, not the coarse equilibrium's own
+            softened.append(args["soften"])
+        return solve(sim, start, method, args)
+
+    monkeypatch.setattr(statics, "_by_newton", spy)
+    assert _coarse_start(Simulator(model)).start(progress=False, softened_only=True) is None
+    assert softened == [True]
+    monkeypatch.undo()
+    result = solve_statics(model, progress=False)
+    assert _largest_residual_ratio(result.simulator) < 1e-4

@@ -182,8 +182,9 @@ class StaticsConfig(_Strict):
                                 description="equilibria (with their compiled models) kept in memory for a geometry "
                                             "drawn again; 0 keeps none")
     method: Literal["auto", "newton"] = Field(
-        "auto", description="solve_statics' method: auto falls back to the slow relaxation solver where Newton's "
-                            "method does not converge; newton refuses such a geometry at once (StaticsNotConverged)")
+        "newton", description="solve_statics' method: newton refuses a geometry Newton's method does not solve at "
+                              "once (StaticsNotConverged, the reset draws again); auto falls back to the slow "
+                              "relaxation solver there (seconds)")
 
 
 class RenderConfig(_Strict):

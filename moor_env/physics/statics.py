@@ -85,12 +85,14 @@ def n_static_dofs(sim) -> int:
 
 def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS, max_step_m: float = 20.0,
                       warm: bool = False, analytic_guess: bool = True, progress: bool = True,
-                      method: str = "auto", mapped: bool = False) -> StaticsReport:
+                      method: str = "auto", mapped: bool = False, softened_only: bool = False) -> StaticsReport:
     """Drive the simulator's current state to static equilibrium in place.
 
     ``method``: "auto" runs :func:`solve_newton` and, where it does not converge, the slow, robust solver of
     ``physics/statics_relaxation.py`` from the same start; "newton" and "relaxation" run one of them only.
     Other parameters and exceptions as :func:`solve_newton`; the report's ``method`` says which solver finished.
+    ``softened_only``: a mapped start with the full budget gets its softened try only (:func:`_softened`), for a
+    caller with a nearer start to try next.
 
     Where the scene models the line-anchor contact, the lines are solved without it first: an equilibrium with no
     line inside the anchor is one of the contact problem too (every contact force is zero), and most scenes have
@@ -109,7 +111,11 @@ def solve_equilibrium(sim, tol_rel: float = 1e-4, max_iter: int = MAX_ITERATIONS
     if method != "relaxation":
         args = {"tol_rel": tol_rel, "max_iter": max_iter, "max_step_m": max_step_m, "warm": warm,
                 "analytic_guess": analytic_guess, "progress": progress, "mapped": mapped}
-        report = _softened(sim, start, args) if mapped and max_iter > SOFTENED_START_ITERATIONS else None
+        softened = mapped and max_iter > SOFTENED_START_ITERATIONS
+        report = _softened(sim, start, args) if softened else None
+        if report is None and softened and softened_only:
+            raise StaticsNotConverged(f"static equilibrium not reached from the mapped start within its "
+                                      f"{SOFTENED_START_ITERATIONS} softened iterations", None)
         if report is None:
             report = _by_newton(sim, start, method, {**args, "soften": False})
         if report is not None:
