@@ -78,7 +78,7 @@ def _secant_gain(gain: float, last: tuple[float, float] | None, err: float) -> f
     return measured if 0.5 <= measured <= 2.0 else gain
 
 
-def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool):
+def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool, finer: CoarseStart | None = None):
     """:func:`solve_equilibrium` by ``method``. Where the lines are finer than the coarse start's
     (``moor_env.coarse_start``) and ``checks``, a scene whose first guess lays the fibre rope near the seabed and
     whose coarse equilibrium rests several fibre nodes on it is refused first
@@ -87,7 +87,9 @@ def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool):
     the default preset's for lines finer than that; a refusal either start left pending is raised where both
     fail, the fast preset's unless the default preset's equilibrium hangs the fibre clear), then the first guess
     again with ``MAX_ITERATIONS``; the relaxation fallback last. Where the default preset's start follows, the fast
-    preset's gets only its softened try (``SOFTENED_START_ITERATIONS``).
+    preset's gets only its softened try (``SOFTENED_START_ITERATIONS``). ``finer``: where this solve is the default
+    preset's start of finer lines, their coarse start; its equilibrium is this solve's coarse start too, and this
+    solve begins with it instead of a first try from the guess.
 
     Why that order: a solve from the first guess that has not converged in a few hundred iterations mostly
     stalls (with the loop resting against the anchor in current); from the coarse start most of those converge
@@ -96,11 +98,15 @@ def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool):
     fast preset's start gets only its softened try where the default preset's follows: on the statics benchmark,
     every fine solve that converged from the fast preset's equilibrium did so within that try (9-240 iterations),
     while the two that went on to the full budget did not converge in it (0.36 and 0.50 s) and then converged from
-    the default preset's."""
+    the default preset's. Why the default preset's lines start from the fast preset's equilibrium when they are
+    the start of finer lines: the finer lines did not converge from the first guess, and on the statics
+    benchmarks' scenes the default preset's lines did not either in any such solve."""
     if method == "relaxation":
         return solve_equilibrium(sim, progress=progress, method=method)
     solve = functools.partial(_coarse_solve, progress=progress)
     coarse = CoarseStart(sim, solve)
+    if finer is not None:
+        coarse.share(finer)
     guessed = checks and coarse.keys is not None and n_static_dofs(sim) > 0
     if guessed:  # the first try starts from this guess
         first_guess(sim)
@@ -108,12 +114,15 @@ def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool):
     budgets = (FIRST_TRY_ITERATIONS, MAX_ITERATIONS) if coarse.keys is not None else (MAX_ITERATIONS,)
     failure = None
     for k, budget in enumerate(budgets):
+        if k == 0 and len(budgets) > 1 and finer is not None:
+            continue
         if k > 0:
-            middle = CoarseStart(sim, solve, MIDDLE_PRESET)
+            middle = CoarseStart(sim, functools.partial(_coarse_solve, progress=progress, finer=coarse),
+                                 MIDDLE_PRESET)
             report = coarse.start(progress, softened_only=middle.keys is not None)
             pending = coarse.pending
             if report is None:
-                report = middle.start(progress)
+                report = middle.start(progress, unsoftened_first=True)
                 if middle.fibre_resting == 0:  # nearer the fine lines, it hangs the fibre clear
                     pending = None
                 pending = middle.pending or pending
@@ -133,12 +142,14 @@ def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool):
     return solve_equilibrium(sim, progress=progress, method="relaxation")
 
 
-def _coarse_solve(model: Model, progress: bool) -> StaticResult:
+def _coarse_solve(model: Model, progress: bool, finer: CoarseStart | None = None) -> StaticResult:
     """The coarse start's solve: the hanging equilibrium of a coarse compile by Newton's method, without the
     refusals of an equilibrium (the fine lines' own equilibrium is checked). An equilibrium that rests
     ``REFUSED_FROM_NODES`` or more fibre nodes on the seabed is returned before its drop-height corrections
-    (``settle_resting_fibre``)."""
-    return _hanging_equilibrium(model, 1e-3, progress, "newton", checks=False, settle_resting_fibre=True)
+    (``settle_resting_fibre``). ``finer``: the coarse start of the finer lines this compile is the default
+    preset's start of (:func:`_equilibrium`)."""
+    return _hanging_equilibrium(model, 1e-3, progress, "newton", checks=False, settle_resting_fibre=True,
+                                finer=finer)
 
 
 def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: bool = True,
@@ -167,12 +178,13 @@ def solve_statics(scene: SceneConfig | Model, tol_m: float = 1e-3, progress: boo
 
 
 def _hanging_equilibrium(model: Model, tol_m: float, progress: bool, method: str, checks: bool,
-                         t0: float | None = None, settle_resting_fibre: bool = False) -> StaticResult:
+                         t0: float | None = None, settle_resting_fibre: bool = False,
+                         finer: CoarseStart | None = None) -> StaticResult:
     """:func:`solve_statics` of a compiled model; ``checks`` False skips the refusals of an equilibrium (fibre on
     the seabed, a line through the anchor): the coarse start maps such an equilibrium too, and the fine lines'
     own equilibrium is then checked. ``t0``: the ``time.perf_counter`` the wall time counts from (the compile
     included where given). ``settle_resting_fibre``: an equilibrium that rests ``REFUSED_FROM_NODES`` or more
-    fibre nodes on the seabed is kept without its drop-height corrections.
+    fibre nodes on the seabed is kept without its drop-height corrections. ``finer``: as :func:`_equilibrium`'s.
 
     Why: the coarse start refuses such a scene, and the corrections (the wire lengthened or shortened by the tip's
     height error) neither lift the fibre nor let it down: on the statics benchmark's scenes
@@ -182,7 +194,7 @@ def _hanging_equilibrium(model: Model, tol_m: float, progress: bool, method: str
     on its fine lines."""
     t0 = time.perf_counter() if t0 is None else t0
     sim = Simulator(model)
-    report = _equilibrium(sim, progress, method, checks)
+    report = _equilibrium(sim, progress, method, checks, finer)
     iterations = report.iterations
     finished = report.method
     sc = model.scene

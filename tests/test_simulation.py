@@ -500,3 +500,35 @@ def test_fast_start_gets_its_softened_try_only_where_the_middle_start_follows(mo
     monkeypatch.undo()
     result = solve_statics(model, progress=False)
     assert _largest_residual_ratio(result.simulator) < 1e-4
+
+
+def test_middle_start_shares_the_fast_equilibrium_and_starts_without_the_softening(monkeypatch):
+    """Reference: the solver's tolerance on the discrete model's residual (1e-4 of each node's weight). On this
+    scene the fine lines converge from neither the first guess nor the fast preset's equilibrium; the default
+    preset's lines, their next start, take the fast preset's equilibrium already solved (the fast preset's compile
+    is solved once, not again for them) and the fine lines' solve from the default preset's equilibrium converges
+    in its first try, without the softened stages."""
+    from moor_env import compile_scene
+    from moor_env import simulation as simulation_module
+    from moor_env.physics import statics
+
+    model = compile_scene(load_scene("gjoa-500", FAST_START_BEFORE_THE_MIDDLE))
+    compiles, mapped = [], []
+    coarse_solve = simulation_module._coarse_solve
+    by_newton = statics._by_newton
+
+    def count_compiles(coarse_model, *args, **kwargs):
+        compiles.append(coarse_model.scene.discretization.loop_chain_segment_m)
+        return coarse_solve(coarse_model, *args, **kwargs)
+
+    def spy(sim, start, method, args):
+        if sim.model is model and args["mapped"]:
+            mapped.append(args["soften"])
+        return by_newton(sim, start, method, args)
+
+    monkeypatch.setattr(simulation_module, "_coarse_solve", count_compiles)
+    monkeypatch.setattr(statics, "_by_newton", spy)
+    result = solve_statics(model, progress=False)
+    assert compiles == [2.0, 1.0]  # the fast preset's loop chain once, then the default preset's
+    assert mapped == [True, False]  # from the fast preset's equilibrium softened, from the default's as it is
+    assert _largest_residual_ratio(result.simulator) < 1e-4
