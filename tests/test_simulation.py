@@ -506,14 +506,14 @@ def test_middle_start_shares_the_fast_equilibrium_and_starts_without_the_softeni
     """Reference: the solver's tolerance on the discrete model's residual (1e-4 of each node's weight). On this
     scene the fine lines converge from neither the first guess nor the fast preset's equilibrium; the default
     preset's lines, their next start, take the fast preset's equilibrium already solved (the fast preset's compile
-    is solved once, not again for them) and the fine lines' solve from the default preset's equilibrium converges
-    in its first try, without the softened stages."""
+    is solved once, not again for them, and they are not tried from the first guess) and the fine lines' solve
+    from the default preset's equilibrium converges in its first try, without the softened stages."""
     from moor_env import compile_scene
     from moor_env import simulation as simulation_module
     from moor_env.physics import statics
 
     model = compile_scene(load_scene("gjoa-500", FAST_START_BEFORE_THE_MIDDLE))
-    compiles, mapped = [], []
+    compiles, mapped, middle_from_guess = [], [], []
     coarse_solve = simulation_module._coarse_solve
     by_newton = statics._by_newton
 
@@ -524,6 +524,8 @@ def test_middle_start_shares_the_fast_equilibrium_and_starts_without_the_softeni
     def spy(sim, start, method, args):
         if sim.model is model and args["mapped"]:
             mapped.append(args["soften"])
+        if sim.model.scene.discretization.loop_chain_segment_m == 1.0 and not (args["mapped"] or args["warm"]):
+            middle_from_guess.append(args["max_iter"])
         return by_newton(sim, start, method, args)
 
     monkeypatch.setattr(simulation_module, "_coarse_solve", count_compiles)
@@ -531,4 +533,5 @@ def test_middle_start_shares_the_fast_equilibrium_and_starts_without_the_softeni
     result = solve_statics(model, progress=False)
     assert compiles == [2.0, 1.0]  # the fast preset's loop chain once, then the default preset's
     assert mapped == [True, False]  # from the fast preset's equilibrium softened, from the default's as it is
+    assert middle_from_guess == []
     assert _largest_residual_ratio(result.simulator) < 1e-4
