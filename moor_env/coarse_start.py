@@ -141,9 +141,8 @@ class CoarseStart:
         solves), or None where that start is not to be had (lines no finer than the coarse ones, the coarse scene
         unsolved, lines that do not map) or Newton's method does not converge from it. ``softened_only``: the
         fine lines get only the softened try of their full budget (``solve_equilibrium``), where a nearer start
-        follows;
-        ``unsoftened_first``: they get ``SOFTENED_START_ITERATIONS`` without the softened stages first, then the
-        softened try only (a start near the fine lines, module docstring).
+        follows; ``unsoftened_first``: they get ``SOFTENED_START_ITERATIONS`` without the softened stages first,
+        then the softened try only (a start near the fine lines, module docstring).
 
         Raises
         ------

@@ -101,8 +101,8 @@ def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool, fine
     every fine solve that converged from the fast preset's equilibrium did so within that try (9-240 iterations),
     while the two that went on to the full budget did not converge in it (0.36 and 0.50 s) and then converged from
     the default preset's. Why the default preset's lines start from the fast preset's equilibrium when they are
-    the start of finer lines: the finer lines did not converge from the first guess, and on the statics
-    benchmarks' scenes the default preset's lines did not either in any such solve."""
+    the start of finer lines: the finer lines did not converge from the first guess, and the default preset's lines
+    did not either in any of the eight such solves on the two statics benchmarks' scenes."""
     if method == "relaxation":
         return solve_equilibrium(sim, progress=progress, method=method)
     solve = functools.partial(_coarse_solve, progress=progress)
