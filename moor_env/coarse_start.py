@@ -4,9 +4,16 @@
 
 It serves twice, solved at most once per solve (:class:`CoarseStart`):
 
-- **Refusal at once.** Where the first guess lays the fibre rope within ``GUESS_NEAR_SEABED_M`` of the seabed, the
-  coarse equilibrium is solved before the fine lines, and where it rests ``REFUSED_FROM_NODES`` or more fibre nodes
-  on the seabed the scene is refused (:class:`~moor_env.errors.NoEquilibrium`) without solving the fine lines.
+- **Refusal at once.** Where the first guess lays the fibre rope within ``GUESS_NEAR_SEABED_M`` of the seabed and
+  no other line on it, the coarse compile is solved without the seabed (and without the line-anchor contact), and
+  where that equilibrium dips the fibre more than ``PROBE_DIP_M`` through the seabed with every other line above it,
+  the scene is refused (:meth:`CoarseStart.refuse_fibre_on_seabed`). On the statics benchmark's scenes that refuses
+  23 of the 127 scenes without an equilibrium in 7 ms (median; 12 ms at most, compile included), among them the
+  three slowest to refuse otherwise (0.6-0.75 s); no scene with an equilibrium is refused so, on those scenes or
+  on the envs' resolution's 1000.
+  Otherwise the coarse equilibrium is solved before the fine lines, and where it rests ``REFUSED_FROM_NODES`` or
+  more fibre nodes on the seabed the scene is refused (:class:`~moor_env.errors.NoEquilibrium`) without solving the
+  fine lines.
   Why: the fine lines of such a scene mostly do not converge (the fibre lying on the seabed in current is nearly
   free sideways), so a solve of them runs into its budgets before the scene is refused. The numbers were measured on
   the statics benchmark's scenes (``benchmarks/statics.py``, 1000 drawn, seed 0), of which 876 are valid with lines
@@ -40,6 +47,7 @@ It serves twice, solved at most once per solve (:class:`CoarseStart`):
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 from collections.abc import Callable
@@ -48,19 +56,25 @@ from typing import TYPE_CHECKING
 from moor_env.compile import Model, compile_scene
 from moor_env.errors import MoorEnvError, NoEquilibrium, SimulationDiverged, StaticsNotConverged
 from moor_env.fidelity import fidelity_presets
+from moor_env.physics import layout as L
 from moor_env.physics.statics import MAX_ITERATIONS, SOFTENED_START_ITERATIONS, solve_equilibrium
-from moor_env.physics.statics_checks import fibre_on_seabed, fibre_refusal
+from moor_env.physics.statics_checks import fibre_nodes, fibre_on_seabed, fibre_refusal, other_nodes_down
+from moor_env.physics.statics_guess import first_guess
 from moor_env.remesh import remesh_state
+from moor_env.simulator import Simulator
 
 if TYPE_CHECKING:
     from moor_env.simulation import StaticResult
-    from moor_env.simulator import Simulator
 
 COARSE_PRESET = "fast"  # the preset whose segment lengths the coarse compile takes
 MIDDLE_PRESET = "default"  # the second start's, for lines finer than its own (CoarseStart.start)
 FIRST_TRY_ITERATIONS = 200  # Newton iterations from the first guess before the coarse start is tried
 GUESS_NEAR_SEABED_M = 1.0  # a first guess with the fibre this close to the seabed has the coarse solve go first
 REFUSED_FROM_NODES = 2  # fibre nodes of the coarse equilibrium on the seabed that refuse the scene at once
+PROBE_ITERATIONS = 100  # Newton iterations of the equilibrium without the seabed at most
+PROBE_DIP_M = 0.5  # how far the fibre must dip below the seabed in it to refuse the scene
+LOWERED_SEABED_M = 1e6  # the seabed's depth in it [m]: below any line's reach
+GROUNDED_M = 1e-3  # a node of the first guess this close above the seabed lies on it [m]
 
 
 @functools.cache
@@ -93,6 +107,7 @@ class CoarseStart:
         self.keys = coarse_keys(sim.model, preset)
         self._solve = solve
         self._result: StaticResult | None = None
+        self._model: Model | None = None
         self._solved = False
         self.pending: NoEquilibrium | None = None  # a refusal to raise if the next start fails too
         self.fibre_resting: int | None = None  # fibre nodes on the seabed in the equilibrium mapped by start()
@@ -105,30 +120,75 @@ class CoarseStart:
             self._result = other.equilibrium()
             self._solved = True
 
+    def _coarse_model(self) -> Model:
+        """The coarse compile (compiled on the first call); the simulator's own model where no line is finer."""
+        if self.keys is None:
+            return self.sim.model
+        if self._model is None:
+            scene = self.sim.model.scene
+            self._model = compile_scene(
+                scene.model_copy(update={"discretization": scene.discretization.model_copy(update=self.keys)}))
+        return self._model
+
     def equilibrium(self) -> StaticResult | None:
         """The coarse equilibrium, or None where the lines are no finer than the coarse ones or it is not reached;
         solved on the first call."""
         if self.keys is None or self._solved:
             return self._result
         self._solved = True
-        scene = self.sim.model.scene
-        coarse = scene.model_copy(update={"discretization": scene.discretization.model_copy(update=self.keys)})
         try:
-            self._result = self._solve(compile_scene(coarse))
+            self._result = self._solve(self._coarse_model())
         except (MoorEnvError, ValueError):
             pass
         return self._result
 
+    def _fibre_dip_without_seabed(self) -> tuple[int, float] | None:
+        """The fibre rope below the seabed in the coarse compile's equilibrium without the seabed and without the
+        line-anchor contact (``PROBE_ITERATIONS`` at most, from its first guess): its nodes below the seabed and the
+        lowest one's height above it [m], where that lies more than ``PROBE_DIP_M`` below it and no other line's
+        node lies below it; None otherwise (the solve not converged included), and without a solve where the first
+        guess lays another line on the seabed (that line then mostly sinks through it, and the solve decides
+        nothing: on the statics benchmark's scenes, 83 of the 104 it left undecided).
+
+        Why this refuses the scene: an equilibrium of the scene that hangs every line clear of the seabed is an
+        equilibrium without the seabed too. The one found dips the fibre through the seabed, so the scene's own
+        equilibrium rests a line on the seabed, and with every other line above the seabed in this one, the fibre.
+        That takes the scene without the seabed to have this one equilibrium, the coarse lines to hang as the fine
+        ones, and the anchor's contact to move the loop's chain and not the fibre; on the benchmarks' scenes, no
+        scene with an equilibrium is refused so. It is the lighter problem: no seabed contact to settle for a
+        nearly weightless rope, no contact with the anchor."""
+        probe = Simulator(self._coarse_model())
+        fibre = fibre_nodes(probe)
+        try:
+            first_guess(probe)
+            if other_nodes_down(probe, fibre, GROUNDED_M) > 0:
+                return None
+            with _seabed_and_contact_off(probe):
+                solve_equilibrium(probe, method="newton", max_iter=PROBE_ITERATIONS, analytic_guess=False,
+                                  progress=False)
+        except (MoorEnvError, ValueError):
+            return None
+        resting, lowest = fibre_on_seabed(probe)
+        return (resting, lowest) if lowest < -PROBE_DIP_M and other_nodes_down(probe, fibre) == 0 else None
+
     def refuse_fibre_on_seabed(self) -> None:
         """Refuse the scene at once where the first guess (the simulator's state) lays the fibre rope within
-        ``GUESS_NEAR_SEABED_M`` of the seabed and the coarse equilibrium rests ``REFUSED_FROM_NODES`` or more fibre
-        nodes on it (module docstring).
+        ``GUESS_NEAR_SEABED_M`` of the seabed and either the coarse compile's equilibrium without the seabed dips the
+        fibre through it (:meth:`_fibre_dip_without_seabed`) or the coarse equilibrium rests ``REFUSED_FROM_NODES``
+        or more fibre nodes on it (module docstring); the latter only where the lines are finer than the coarse ones.
 
         Raises
         ------
         moor_env.errors.NoEquilibrium
         """
-        if self.keys is None or fibre_on_seabed(self.sim)[1] > GUESS_NEAR_SEABED_M:
+        if fibre_on_seabed(self.sim)[1] > GUESS_NEAR_SEABED_M:
+            return
+        dip = self._fibre_dip_without_seabed()
+        if dip is not None:
+            raise fibre_refusal(self.sim, f"{dip[0]} of its nodes, the lowest {-dip[1]:.3g} m under it, in the "
+                                          f"equilibrium without the seabed at the {self.preset} preset's segment "
+                                          f"lengths where finer")
+        if self.keys is None:
             return
         coarse = self.equilibrium()
         resting = 0 if coarse is None else fibre_on_seabed(coarse.simulator)[0]
@@ -183,6 +243,19 @@ class CoarseStart:
                 raise refusal
             self.pending = refusal
         return None
+
+
+@contextlib.contextmanager
+def _seabed_and_contact_off(sim: Simulator):
+    """The simulator's seabed lowered out of any line's reach (``LOWERED_SEABED_M``) and its model's line-anchor
+    contact off for the block, both restored whatever it raises."""
+    env_f, contact_f = sim.env_f, sim.model.contact_f
+    depth, contact = env_f[L.EF_DEPTH], contact_f[L.CF_ON]
+    env_f[L.EF_DEPTH], contact_f[L.CF_ON] = LOWERED_SEABED_M, 0.0
+    try:
+        yield
+    finally:
+        env_f[L.EF_DEPTH], contact_f[L.CF_ON] = depth, contact
 
 
 def _fibre_refusal(resting: int, fine: Simulator, preset: str) -> NoEquilibrium | None:

@@ -109,7 +109,7 @@ def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool, fine
     coarse = CoarseStart(sim, solve)
     if finer is not None:
         coarse.share(finer)
-    guessed = checks and coarse.keys is not None and n_static_dofs(sim) > 0
+    guessed = checks and n_static_dofs(sim) > 0
     if guessed:  # the first try starts from this guess
         first_guess(sim)
         coarse.refuse_fibre_on_seabed()

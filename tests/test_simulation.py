@@ -269,10 +269,18 @@ def test_fibre_the_coarse_equilibrium_lays_on_the_seabed_is_refused_before_the_f
         return solve(sim, **kwargs)
 
     monkeypatch.setattr(simulation_module, "solve_equilibrium", not_on_the_fine_lines)
+    _without_seabed_probe(monkeypatch)  # which refuses this scene first (tests/test_coarse_start.py)
     with pytest.raises(NoEquilibrium) as refused:
         solve_statics(compile_scene(load_scene("gjoa-500", long_line)), progress=False)
     assert refused.value.key == "installation.mooring_line_length_m"
     assert "of its nodes on it" in refused.value.cause and "fast preset" in refused.value.cause
+
+
+def _without_seabed_probe(monkeypatch) -> None:
+    """The coarse start's refusal from the equilibrium without the seabed off, for a test of the refusals after it."""
+    from moor_env.coarse_start import CoarseStart
+
+    monkeypatch.setattr(CoarseStart, "_fibre_dip_without_seabed", lambda self: None)
 
 
 def test_one_coarse_fibre_node_on_the_seabed_does_not_refuse_the_scene():
@@ -337,6 +345,7 @@ def test_scene_whose_current_takes_long_increments_is_refused_without_the_fallba
     from moor_env.physics import statics_relaxation
 
     monkeypatch.setattr(statics_relaxation, "solve_equilibrium", lambda *a, **k: pytest.fail("the fallback ran"))
+    _without_seabed_probe(monkeypatch)  # which refuses this scene before the coarse equilibrium
     with pytest.raises(NoEquilibrium) as refused:
         solve_statics(load_scene("gjoa-500", CURRENT_IN_LONG_INCREMENTS), progress=False)
     assert refused.value.key == "installation.mooring_line_length_m"

@@ -17,26 +17,41 @@ from moor_env.physics.contact import may_touch
 ANCHOR_CLEARANCE_M = 0.05  # deepest a line node may lie inside the anchor in an equilibrium that is accepted
 
 
-def fibre_on_seabed(sim) -> tuple[int, float]:
-    """The mooring line's fibre rope against the seabed in the simulator's state: how many of its nodes lie below
-    the seabed (resting on it) and the height of its lowest node above the seabed [m] (inf without a fibre)."""
+def fibre_nodes(sim) -> np.ndarray:
+    """Which nodes belong to the mooring line's fibre rope (the ends of its active fibre segments): a boolean mask
+    over the nodes, all False without a fibre."""
     m = sim.model
-    if "mooring_line" not in m.lines:
-        return 0, math.inf
     st = sim.state
-    inst = m.scene.installation
-    fibre = m.material_names.index(inst.fibre_material) if inst.fibre_material in m.material_names else -1
+    nodes = np.zeros(st.node_pos.shape[0], dtype=bool)
+    if "mooring_line" not in m.lines or m.scene.installation.fibre_material not in m.material_names:
+        return nodes
+    fibre = m.material_names.index(m.scene.installation.fibre_material)
     line = m.lines["mooring_line"].index
     start, nseg = st.line_i[line, L.LI_SEG_START], st.line_i[line, L.LI_NSEG]
     segs = st.seg_i[start:start + nseg]
     segs = segs[(segs[:, L.SI_ACTIVE] == 1) & (segs[:, L.SI_MAT] == fibre)]
-    if segs.shape[0] == 0:
-        return 0, math.inf
-    nodes = np.zeros(st.node_pos.shape[0], dtype=bool)
     nodes[segs[:, L.SI_A]] = True
     nodes[segs[:, L.SI_B]] = True
-    height = st.node_pos[nodes, 2] + sim.env_f[L.EF_DEPTH]
+    return nodes
+
+
+def fibre_on_seabed(sim) -> tuple[int, float]:
+    """The mooring line's fibre rope against the seabed in the simulator's state: how many of its nodes lie below
+    the seabed (resting on it) and the height of its lowest node above the seabed [m] (inf without a fibre)."""
+    nodes = fibre_nodes(sim)
+    if not nodes.any():
+        return 0, math.inf
+    height = sim.state.node_pos[nodes, 2] + sim.env_f[L.EF_DEPTH]
     return int(np.count_nonzero(height < 0.0)), float(np.min(height))
+
+
+def other_nodes_down(sim, fibre: np.ndarray, height_m: float = 0.0) -> int:
+    """How many free nodes not of the fibre rope (``fibre``: :func:`fibre_nodes`) lie below ``height_m`` above the
+    seabed."""
+    st = sim.state
+    free = st.node_i[:, L.NI_KIND] == L.NODE_FREE
+    height = st.node_pos[:, 2] + sim.env_f[L.EF_DEPTH]
+    return int(np.count_nonzero(free & ~fibre & (height < height_m)))
 
 
 def fibre_refusal(sim, where: str = "") -> NoEquilibrium:
