@@ -4,13 +4,13 @@
 
 It serves twice, solved at most once per solve (:class:`CoarseStart`):
 
-- **Refusal at once.** Where the first guess lays the fibre rope within ``GUESS_NEAR_SEABED_M`` of the seabed and
-  no other line on it, the coarse compile is solved without the seabed (and without the line-anchor contact), and
-  where that equilibrium dips the fibre more than ``PROBE_DIP_M`` through the seabed with every other line above it,
-  the scene is refused (:meth:`CoarseStart.refuse_fibre_on_seabed`). On the statics benchmark's scenes that refuses
-  23 of the 127 scenes without an equilibrium in 7 ms (median; 12 ms at most, compile included), among them the
-  three slowest to refuse otherwise (0.6-0.75 s); no scene with an equilibrium is refused so, on those scenes or
-  on the envs' resolution's 1000.
+- **Refusal at once.** Where the first guess lays the fibre rope within ``GUESS_NEAR_SEABED_M`` of the seabed, the
+  coarse compile is solved with the seabed bearing every line but the fibre (and without the line-anchor contact),
+  and where that equilibrium dips the fibre more than ``PROBE_DIP_M`` through the seabed, the scene is refused
+  (:meth:`CoarseStart.refuse_fibre_on_seabed`). On the statics benchmark's scenes that refuses 56 of the 127 scenes
+  without an equilibrium in 9 ms (median; 18 ms at most, compile included), among them the five slowest to refuse
+  otherwise (0.27-0.75 s); no scene with an equilibrium is refused so, on those scenes or on the envs'
+  resolution's 1000.
   Otherwise the coarse equilibrium is solved before the fine lines, and where it rests ``REFUSED_FROM_NODES`` or
   more fibre nodes on the seabed the scene is refused (:class:`~moor_env.errors.NoEquilibrium`) without solving the
   fine lines.
@@ -58,7 +58,7 @@ from moor_env.errors import MoorEnvError, NoEquilibrium, SimulationDiverged, Sta
 from moor_env.fidelity import fidelity_presets
 from moor_env.physics import layout as L
 from moor_env.physics.statics import MAX_ITERATIONS, SOFTENED_START_ITERATIONS, solve_equilibrium
-from moor_env.physics.statics_checks import fibre_nodes, fibre_on_seabed, fibre_refusal, other_nodes_down
+from moor_env.physics.statics_checks import fibre_material, fibre_on_seabed, fibre_refusal
 from moor_env.physics.statics_guess import first_guess
 from moor_env.remesh import remesh_state
 from moor_env.simulator import Simulator
@@ -71,10 +71,8 @@ MIDDLE_PRESET = "default"  # the second start's, for lines finer than its own (C
 FIRST_TRY_ITERATIONS = 200  # Newton iterations from the first guess before the coarse start is tried
 GUESS_NEAR_SEABED_M = 1.0  # a first guess with the fibre this close to the seabed has the coarse solve go first
 REFUSED_FROM_NODES = 2  # fibre nodes of the coarse equilibrium on the seabed that refuse the scene at once
-PROBE_ITERATIONS = 100  # Newton iterations of the equilibrium without the seabed at most
+PROBE_ITERATIONS = 100  # Newton iterations of the equilibrium with the fibre through the seabed at most
 PROBE_DIP_M = 0.5  # how far the fibre must dip below the seabed in it to refuse the scene
-LOWERED_SEABED_M = 1e6  # the seabed's depth in it [m]: below any line's reach
-GROUNDED_M = 1e-3  # a node of the first guess this close above the seabed lies on it [m]
 
 
 @functools.cache
@@ -142,40 +140,36 @@ class CoarseStart:
             pass
         return self._result
 
-    def _fibre_dip_without_seabed(self) -> tuple[int, float] | None:
-        """The fibre rope below the seabed in the coarse compile's equilibrium without the seabed and without the
-        line-anchor contact (``PROBE_ITERATIONS`` at most, from its first guess): its nodes below the seabed and the
-        lowest one's height above it [m], where that lies more than ``PROBE_DIP_M`` below it and no other line's
-        node lies below it; None otherwise (the solve not converged included), and without a solve where the first
-        guess lays another line on the seabed (that line then mostly sinks through it, and the solve decides
-        nothing: on the statics benchmark's scenes, 83 of the 104 it left undecided).
+    def _fibre_dip_through_seabed(self) -> tuple[int, float] | None:
+        """The fibre rope below the seabed in the coarse compile's equilibrium with the seabed bearing every line but
+        the fibre rope and without the line-anchor contact (``PROBE_ITERATIONS`` at most, from its first guess): its
+        nodes below the seabed and the lowest one's height above it [m], where that lies more than ``PROBE_DIP_M``
+        below it; None otherwise (the solve not converged included).
 
-        Why this refuses the scene: an equilibrium of the scene that hangs every line clear of the seabed is an
-        equilibrium without the seabed too. The one found dips the fibre through the seabed, so the scene's own
-        equilibrium rests a line on the seabed, and with every other line above the seabed in this one, the fibre.
-        That takes the scene without the seabed to have this one equilibrium, the coarse lines to hang as the fine
-        ones, and the anchor's contact to move the loop's chain and not the fibre; on the benchmarks' scenes, no
-        scene with an equilibrium is refused so. It is the lighter problem: no seabed contact to settle for a
-        nearly weightless rope, no contact with the anchor."""
+        Why this refuses the scene: an equilibrium of the scene that hangs the fibre clear of the seabed is an
+        equilibrium of this problem too (the seabed bears nothing of the fibre in it). The one found dips the fibre
+        through the seabed, so the scene's own equilibrium rests the fibre on the seabed. That takes this problem
+        to have that one equilibrium, the coarse lines to hang as the fine ones, and the anchor's contact to move
+        the loop's chain and not the fibre; on the benchmarks' scenes, no scene with an equilibrium is refused so.
+        It is the lighter problem: no seabed contact to settle for a nearly weightless rope, no contact with the
+        anchor."""
         probe = Simulator(self._coarse_model())
-        fibre = fibre_nodes(probe)
         try:
             first_guess(probe)
-            if other_nodes_down(probe, fibre, GROUNDED_M) > 0:
-                return None
-            with _seabed_and_contact_off(probe):
+            with _fibre_through_seabed_and_contact_off(probe.model):
                 solve_equilibrium(probe, method="newton", max_iter=PROBE_ITERATIONS, analytic_guess=False,
                                   progress=False)
         except (MoorEnvError, ValueError):
             return None
         resting, lowest = fibre_on_seabed(probe)
-        return (resting, lowest) if lowest < -PROBE_DIP_M and other_nodes_down(probe, fibre) == 0 else None
+        return (resting, lowest) if lowest < -PROBE_DIP_M else None
 
     def refuse_fibre_on_seabed(self) -> None:
         """Refuse the scene at once where the first guess (the simulator's state) lays the fibre rope within
-        ``GUESS_NEAR_SEABED_M`` of the seabed and either the coarse compile's equilibrium without the seabed dips the
-        fibre through it (:meth:`_fibre_dip_without_seabed`) or the coarse equilibrium rests ``REFUSED_FROM_NODES``
-        or more fibre nodes on it (module docstring); the latter only where the lines are finer than the coarse ones.
+        ``GUESS_NEAR_SEABED_M`` of the seabed and either the coarse compile's equilibrium with the seabed bearing no
+        fibre dips the fibre through it (:meth:`_fibre_dip_through_seabed`) or the coarse equilibrium rests
+        ``REFUSED_FROM_NODES`` or more fibre nodes on it (module docstring); the latter only where the lines are
+        finer than the coarse ones.
 
         Raises
         ------
@@ -183,11 +177,11 @@ class CoarseStart:
         """
         if fibre_on_seabed(self.sim)[1] > GUESS_NEAR_SEABED_M:
             return
-        dip = self._fibre_dip_without_seabed()
+        dip = self._fibre_dip_through_seabed()
         if dip is not None:
             raise fibre_refusal(self.sim, f"{dip[0]} of its nodes, the lowest {-dip[1]:.3g} m under it, in the "
-                                          f"equilibrium without the seabed at the {self.preset} preset's segment "
-                                          f"lengths where finer")
+                                          f"equilibrium with the seabed bearing no fibre, at the {self.preset} "
+                                          f"preset's segment lengths where finer")
         if self.keys is None:
             return
         coarse = self.equilibrium()
@@ -246,16 +240,16 @@ class CoarseStart:
 
 
 @contextlib.contextmanager
-def _seabed_and_contact_off(sim: Simulator):
-    """The simulator's seabed lowered out of any line's reach (``LOWERED_SEABED_M``) and its model's line-anchor
-    contact off for the block, both restored whatever it raises."""
-    env_f, contact_f = sim.env_f, sim.model.contact_f
-    depth, contact = env_f[L.EF_DEPTH], contact_f[L.CF_ON]
-    env_f[L.EF_DEPTH], contact_f[L.CF_ON] = LOWERED_SEABED_M, 0.0
+def _fibre_through_seabed_and_contact_off(model: Model):
+    """The model's seabed bearing nothing of the fibre rope (its ``MF_SEABED_D`` 0) and its line-anchor contact off
+    for the block, both restored whatever it raises."""
+    fibre = fibre_material(model)
+    bearing, contact = model.mat_f[fibre, L.MF_SEABED_D], model.contact_f[L.CF_ON]
+    model.mat_f[fibre, L.MF_SEABED_D], model.contact_f[L.CF_ON] = 0.0, 0.0
     try:
         yield
     finally:
-        env_f[L.EF_DEPTH], contact_f[L.CF_ON] = depth, contact
+        model.mat_f[fibre, L.MF_SEABED_D], model.contact_f[L.CF_ON] = bearing, contact
 
 
 def _fibre_refusal(resting: int, fine: Simulator, preset: str) -> NoEquilibrium | None:

@@ -97,7 +97,8 @@ def _material_arrays(scene: SceneConfig) -> tuple[np.ndarray, tuple[str, ...]]:
     for i, name in enumerate(names):
         m = scene.materials[name]
         mat_f[i] = [m.ea_n, m.mass_per_length_kg_m, submerged_mass_per_length(scene, name), m.diameter_m,
-                    m.cd_normal, m.cd_tangential, m.ca_normal, m.ca_tangential, m.axial_damping_ratio, m.mbl_n]
+                    m.cd_normal, m.cd_tangential, m.ca_normal, m.ca_tangential, m.axial_damping_ratio, m.mbl_n,
+                    m.diameter_m]
     return mat_f, names
 
 

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import contextlib
 import functools
 
 import pytest
 
 from moor_env import load_scene, solve_statics
-from moor_env.coarse_start import LOWERED_SEABED_M, PROBE_DIP_M, CoarseStart, coarse_keys
+from moor_env.coarse_start import PROBE_DIP_M, CoarseStart, coarse_keys
 from moor_env.compile import compile_scene
 from moor_env.errors import NoEquilibrium
 from moor_env.fidelity import fidelity_presets
@@ -45,12 +46,11 @@ def test_no_coarse_compile_for_lines_no_finer_than_the_preset():
 FIBRE_ON_THE_SEABED = {"mooring_line_length_m": 750.0, "vessel_spacing_m": 60.0, "current_scale": 0.0}
 
 # The statics benchmark's scene 423 (seed 0), rounded: it converges with the fibre rope a few centimetres clear of
-# the seabed, its first guess lays the loop's chain on the seabed, and its equilibrium without the seabed dips the
-# fibre 36 m through it together with the chain.
-FIBRE_DIPPING_WITH_THE_CHAIN = {"water_depth_m": 1361.78, "vessel_spacing_m": 465.83,
-                                "mooring_line_length_m": 1611.93, "vertical_chain_length_m": 12.44,
-                                "drop_height_m": 50.37, "current_scale": 0.36, "current_direction_deg": 133.85,
-                                "anchor_mass_scale": 0.9255, "fidelity": "default"}
+# the seabed, and its first guess lays the loop's chain on the seabed.
+FIBRE_CLEAR_WITH_THE_CHAIN_ON_THE_SEABED = {
+    "water_depth_m": 1361.78, "vessel_spacing_m": 465.83, "mooring_line_length_m": 1611.93,
+    "vertical_chain_length_m": 12.44, "drop_height_m": 50.37, "current_scale": 0.36, "current_direction_deg": 133.85,
+    "anchor_mass_scale": 0.9255, "fidelity": "default"}
 
 
 def _coarse_start(model):
@@ -64,14 +64,14 @@ def _coarse_start(model):
     return CoarseStart(sim, functools.partial(_coarse_solve, progress=False))
 
 
-def test_equilibrium_without_the_seabed_refuses_a_fibre_it_dips_through_the_seabed(monkeypatch):
+def test_equilibrium_with_the_fibre_through_the_seabed_refuses_a_fibre_it_dips_through_it(monkeypatch):
     """Reference: the scene's own equilibrium (its lines solved without the refusals) rests the fibre rope on the
-    seabed. ``solve_statics`` refuses it from the coarse compile's equilibrium without the seabed: one Newton solve,
-    of the coarse lines with the seabed out of reach and the line-anchor contact off (both restored after it);
-    neither the fine lines nor the coarse lines with the seabed are solved."""
+    seabed. ``solve_statics`` refuses it from the coarse compile's equilibrium with the seabed bearing no fibre: one
+    Newton solve, of the coarse lines with the fibre's ``MF_SEABED_D`` 0 and the line-anchor contact off (both
+    restored after it); neither the fine lines nor the coarse lines with the seabed whole are solved."""
     from moor_env import coarse_start as coarse_module
     from moor_env import simulation as simulation_module
-    from moor_env.physics.statics_checks import fibre_on_seabed
+    from moor_env.physics.statics_checks import fibre_material, fibre_on_seabed
 
     model = compile_scene(load_scene("gjoa-500", FIBRE_ON_THE_SEABED))
     own = simulation_module._hanging_equilibrium(model, 1e-3, False, "newton", checks=False)
@@ -80,7 +80,9 @@ def test_equilibrium_without_the_seabed_refuses_a_fibre_it_dips_through_the_seab
     solve = coarse_module.solve_equilibrium
 
     def probe(sim, **kwargs):
-        solved.append((sim.model.node_i.shape[0], float(sim.env_f[L.EF_DEPTH]), float(sim.model.contact_f[L.CF_ON])))
+        m = sim.model
+        solved.append((m.node_i.shape[0], float(m.mat_f[fibre_material(m), L.MF_SEABED_D]),
+                       float(m.contact_f[L.CF_ON])))
         return solve(sim, **kwargs)
 
     monkeypatch.setattr(coarse_module, "solve_equilibrium", probe)
@@ -89,25 +91,33 @@ def test_equilibrium_without_the_seabed_refuses_a_fibre_it_dips_through_the_seab
     with pytest.raises(NoEquilibrium) as refused:
         solve_statics(model, progress=False)
     assert refused.value.key == "installation.mooring_line_length_m"
-    assert "without the seabed" in refused.value.cause and "fast preset" in refused.value.cause
+    assert "the seabed bearing no fibre" in refused.value.cause and "fast preset" in refused.value.cause
     assert len(solved) == 1 and solved[0][0] < model.node_i.shape[0]
-    assert solved[0][1:] == (LOWERED_SEABED_M, 0.0)
+    assert solved[0][1:] == (0.0, 0.0)
     assert model.contact_f[L.CF_ON] != 0.0  # restored
 
 
-def test_fibre_dipping_with_the_chain_through_the_seabed_refuses_nothing(monkeypatch):
+def test_chain_the_seabed_bears_keeps_a_clear_fibre_from_being_refused(monkeypatch):
     """Reference: the scene converges with the fibre rope clear of the seabed (tests/test_simulation.py, scene 423).
-    Its equilibrium without the seabed dips the fibre through the seabed with the loop's chain, and refuses nothing:
-    the first guess lays chain on the seabed, so it is not solved; solved anyway, the chain below the seabed in it
-    still keeps it from refusing; with neither check it would refuse this scene."""
+    Its coarse equilibrium with the seabed bearing no fibre does not dip the fibre through the seabed; with the
+    seabed bearing nothing of any line, the loop's chain sinks through it and takes the fibre along, which would
+    refuse the scene."""
     from moor_env import coarse_start as coarse_module
 
-    model = compile_scene(load_scene("gjoa-500", FIBRE_DIPPING_WITH_THE_CHAIN))
-    assert _coarse_start(model)._fibre_dip_without_seabed() is None
-    count = coarse_module.other_nodes_down
-    monkeypatch.setattr(coarse_module, "other_nodes_down", lambda sim, fibre, height_m=0.0:
-                        0 if height_m > 0.0 else count(sim, fibre, height_m))  # the guess's check off
-    assert _coarse_start(model)._fibre_dip_without_seabed() is None
-    monkeypatch.setattr(coarse_module, "other_nodes_down", lambda sim, fibre, height_m=0.0: 0)
-    resting, lowest_m = _coarse_start(model)._fibre_dip_without_seabed()
+    model = compile_scene(load_scene("gjoa-500", FIBRE_CLEAR_WITH_THE_CHAIN_ON_THE_SEABED))
+    assert _coarse_start(model)._fibre_dip_through_seabed() is None
+    bears_fibre = coarse_module._fibre_through_seabed_and_contact_off
+
+    @contextlib.contextmanager
+    def bears_nothing(m):
+        saved = m.mat_f[:, L.MF_SEABED_D].copy()
+        m.mat_f[:, L.MF_SEABED_D] = 0.0
+        try:
+            with bears_fibre(m):
+                yield
+        finally:
+            m.mat_f[:, L.MF_SEABED_D] = saved
+
+    monkeypatch.setattr(coarse_module, "_fibre_through_seabed_and_contact_off", bears_nothing)
+    resting, lowest_m = _coarse_start(model)._fibre_dip_through_seabed()
     assert resting >= 1 and lowest_m < -PROBE_DIP_M

@@ -277,10 +277,11 @@ def test_fibre_the_coarse_equilibrium_lays_on_the_seabed_is_refused_before_the_f
 
 
 def _without_seabed_probe(monkeypatch) -> None:
-    """The coarse start's refusal from the equilibrium without the seabed off, for a test of the refusals after it."""
+    """The coarse start's refusal from the equilibrium with the seabed bearing no fibre off, for a test of the
+    refusals after it."""
     from moor_env.coarse_start import CoarseStart
 
-    monkeypatch.setattr(CoarseStart, "_fibre_dip_without_seabed", lambda self: None)
+    monkeypatch.setattr(CoarseStart, "_fibre_dip_through_seabed", lambda self: None)
 
 
 def test_one_coarse_fibre_node_on_the_seabed_does_not_refuse_the_scene():

@@ -56,7 +56,8 @@ MF_CAN = 6
 MF_CAT = 7
 MF_ZETA = 8  # axial damping ratio of one segment's axial mode
 MF_MBL = 9  # [N]
-N_MAT_F = 10
+MF_SEABED_D = 10  # width the seabed bears per metre of line [m]: the diameter (0: the line passes through it)
+N_MAT_F = 11
 
 # line_i columns
 LI_SEG_START = 0

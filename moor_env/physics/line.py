@@ -45,6 +45,7 @@ from moor_env.physics.layout import (
     MF_D,
     MF_EA,
     MF_MASS,
+    MF_SEABED_D,
     MF_SUBMERGED,
     MF_ZETA,
     NI_KIND,
@@ -181,7 +182,7 @@ def segment_loads(node_pos, node_vel, seg_i, seg_f, mat_f, line_f, env_f, curren
         if tension > line_f[line, LF_MAX_TENSION]:
             line_f[line, LF_MAX_TENSION] = tension
         half = 0.5 * l0
-        d = mat_f[m, MF_D]
+        bearing = mat_f[m, MF_SEABED_D] * half  # seabed contact area the segment gives each end
         drag_n, drag_t, ma_n, ma_t = half_segment_morison(mat_f, m, l0, rho)
         half_mass = mat_f[m, MF_MASS] * half
         half_weight = mat_f[m, MF_SUBMERGED] * half * g
@@ -198,7 +199,7 @@ def segment_loads(node_pos, node_vel, seg_i, seg_f, mat_f, line_f, env_f, curren
             node_force[n, 2] += fz + sign * tension * qz - half_weight
             add_slender_added_mass(node_mm, n, qx, qy, qz, ma_n, ma_t)
             node_mass[n] += half_mass
-            node_contact[n] += d * half
+            node_contact[n] += bearing
     return max_strain, worst
 
 

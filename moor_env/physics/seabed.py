@@ -1,9 +1,9 @@
 """Flat seabed at z = -depth: vertical spring-damper contact and regularised Coulomb friction for line nodes.
 
-Vertical pressure (MoorDyn's ``kBot``/``cBot`` model) acts on the node's contact area (diameter times the
-half-lengths of its segments); friction opposes horizontal sliding with magnitude ``mu * F_z``, ramped
-linearly below ``friction_velocity_m_s`` so that a resting line feels no friction (and statics on the
-seabed match the frictionless catenary theory of seeds 000 and 004).
+Vertical pressure (MoorDyn's ``kBot``/``cBot`` model) acts on the node's contact area (its segments' seabed width
+``MF_SEABED_D``, their diameter as compiled, times their half-lengths); friction opposes horizontal sliding with
+magnitude ``mu * F_z``, ramped linearly below ``friction_velocity_m_s`` so that a resting line feels no friction
+(and statics on the seabed match the frictionless catenary theory of seeds 000 and 004).
 
 With penetration p = -depth - z, contact area A, vertical force f_z = (k_bot p - c_bot v_z) A (> 0, else no
 contact) and horizontal velocity v_h::

@@ -31,6 +31,7 @@ from moor_env.physics.layout import (
     MF_D,
     MF_EA,
     MF_MASS,
+    MF_SEABED_D,
     MF_SUBMERGED,
     MF_ZETA,
     NF_POINT_MASS,
@@ -113,7 +114,7 @@ def stable_time_step(model_arrays: dict, integrator: str) -> tuple[float, str]:
     np.add.at(mass, ends, np.repeat(0.5 * l0 * mat_f[m, MF_MASS], 2))
     np.add.at(stiff, ends, np.repeat(mat_f[m, MF_EA] / l0, 2))
     np.add.at(weight, ends, np.repeat(0.5 * l0 * np.maximum(mat_f[m, MF_SUBMERGED], 0.0) * g, 2))
-    np.add.at(contact, ends, np.repeat(0.5 * l0 * mat_f[m, MF_D], 2))
+    np.add.at(contact, ends, np.repeat(0.5 * l0 * mat_f[m, MF_SEABED_D], 2))
     np.add.at(drag, ends, np.repeat(rho * mat_f[m, MF_CDN] * mat_f[m, MF_D] * 0.5 * l0 * REFERENCE_SPEED_M_S, 2))
     for n in np.nonzero(welded)[0]:
         mass[owner[n]] += mass[n]

@@ -17,15 +17,22 @@ from moor_env.physics.contact import may_touch
 ANCHOR_CLEARANCE_M = 0.05  # deepest a line node may lie inside the anchor in an equilibrium that is accepted
 
 
+def fibre_material(model) -> int:
+    """The mooring line's fibre rope's row of the material table (``MF_*`` columns), or -1 without one."""
+    if "mooring_line" not in model.lines or model.scene.installation.fibre_material not in model.material_names:
+        return -1
+    return model.material_names.index(model.scene.installation.fibre_material)
+
+
 def fibre_nodes(sim) -> np.ndarray:
     """Which nodes belong to the mooring line's fibre rope (the ends of its active fibre segments): a boolean mask
     over the nodes, all False without a fibre."""
     m = sim.model
     st = sim.state
     nodes = np.zeros(st.node_pos.shape[0], dtype=bool)
-    if "mooring_line" not in m.lines or m.scene.installation.fibre_material not in m.material_names:
+    fibre = fibre_material(m)
+    if fibre < 0:
         return nodes
-    fibre = m.material_names.index(m.scene.installation.fibre_material)
     line = m.lines["mooring_line"].index
     start, nseg = st.line_i[line, L.LI_SEG_START], st.line_i[line, L.LI_NSEG]
     segs = st.seg_i[start:start + nseg]
@@ -43,15 +50,6 @@ def fibre_on_seabed(sim) -> tuple[int, float]:
         return 0, math.inf
     height = sim.state.node_pos[nodes, 2] + sim.env_f[L.EF_DEPTH]
     return int(np.count_nonzero(height < 0.0)), float(np.min(height))
-
-
-def other_nodes_down(sim, fibre: np.ndarray, height_m: float = 0.0) -> int:
-    """How many free nodes not of the fibre rope (``fibre``: :func:`fibre_nodes`) lie below ``height_m`` above the
-    seabed."""
-    st = sim.state
-    free = st.node_i[:, L.NI_KIND] == L.NODE_FREE
-    height = st.node_pos[:, 2] + sim.env_f[L.EF_DEPTH]
-    return int(np.count_nonzero(free & ~fibre & (height < height_m)))
 
 
 def fibre_refusal(sim, where: str = "") -> NoEquilibrium:

@@ -336,3 +336,27 @@ def test_anchor_clearance_depth_is_the_surface_distance():
     depth, node = deepest_inside_anchor(centre[None, :], kinds, body, shape, -1e9)
     assert depth == pytest.approx(radius, abs=1e-9) and node == 0
     assert deepest_inside_anchor(beside[None, :], kinds, body, shape, -1e9) == (0.0, -1)
+
+
+def test_seabed_bears_a_line_by_its_seabed_width():
+    """Reference: the seabed law's contact area, the bearing width times the half-lengths of a node's segments
+    (``physics/seabed.py``); a line's bearing width is its diameter as compiled, and a width of 0 lets it pass
+    through the seabed (no contact force)."""
+    from moor_env.compile import compile_scene
+    from moor_env.physics.statics_checks import fibre_material, fibre_nodes
+    from moor_env.simulator import Simulator
+
+    sim = Simulator(compile_scene(load_scene("gjoa-500")))
+    m, st = sim.model, sim.state
+    np.testing.assert_array_equal(m.mat_f[:, L.MF_SEABED_D], m.mat_f[:, L.MF_D])
+    fibre = fibre_material(m)
+    inner = np.nonzero(fibre_nodes(sim))[0][1:-1]  # fibre nodes between two fibre segments
+    node = int(inner[len(inner) // 2])
+    st.node_pos[node, 2] = -sim.env_f[L.EF_DEPTH] - 0.01
+    sim.evaluate_loads()
+    segs = np.nonzero((st.seg_i[:, L.SI_A] == node) | (st.seg_i[:, L.SI_B] == node))[0]
+    area = m.mat_f[fibre, L.MF_D] * 0.5 * st.seg_f[segs, L.SF_L0].sum()
+    assert sim.work.node_contact[node] == pytest.approx(area, rel=1e-12)
+    m.mat_f[fibre, L.MF_SEABED_D] = 0.0
+    sim.evaluate_loads()
+    assert sim.work.node_contact[node] == 0.0
