@@ -144,7 +144,7 @@ class CoarseStart:
         """The fibre rope below the seabed in the coarse compile's equilibrium with the seabed bearing every line but
         the fibre rope and without the line-anchor contact (``PROBE_ITERATIONS`` at most, from its first guess): its
         nodes below the seabed and the lowest one's height above it [m], where that lies more than ``PROBE_DIP_M``
-        below it; None otherwise (the solve not converged included).
+        below it; None otherwise (the solve not converged, or no fibre rope, included).
 
         Why this refuses the scene: an equilibrium of the scene that hangs the fibre clear of the seabed is an
         equilibrium of this problem too (the seabed bears nothing of the fibre in it). The one found dips the fibre
@@ -154,6 +154,8 @@ class CoarseStart:
         It is the lighter problem: no seabed contact to settle for a nearly weightless rope, no contact with the
         anchor."""
         probe = Simulator(self._coarse_model())
+        if fibre_material(probe.model) < 0:
+            return None
         try:
             first_guess(probe)
             with _fibre_through_seabed_and_contact_off(probe.model):
