@@ -4,16 +4,20 @@
 
 It serves twice, solved at most once per solve (:class:`CoarseStart`):
 
-- **Refusal at once.** Where the first guess lays the fibre rope within ``GUESS_NEAR_SEABED_M`` of the seabed, the
+- **Refusal at once.** Where the first guess lays the fibre rope within ``PROBE_NEAR_SEABED_M`` of the seabed, the
   coarse compile is solved with the seabed bearing every line but the fibre (and without the line-anchor contact),
   and where that equilibrium dips the fibre more than ``PROBE_DIP_M`` through the seabed, the scene is refused
   (:meth:`CoarseStart.refuse_fibre_on_seabed`). On the statics benchmark's scenes that refuses 56 of the 127 scenes
   without an equilibrium in 9 ms (median; 18 ms at most, compile included), among them the five slowest to refuse
   otherwise (0.27-0.75 s); no scene with an equilibrium is refused so, on those scenes or on the envs'
-  resolution's 1000.
-  Otherwise the coarse equilibrium is solved before the fine lines, and where it rests ``REFUSED_FROM_NODES`` or
-  more fibre nodes on the seabed the scene is refused (:class:`~moor_env.errors.NoEquilibrium`) without solving the
-  fine lines.
+  resolution's 1000. Why within 5 m and not the 1 m below: all 127 lay the fibre within 1 m, but on the envs'
+  resolution a scene in strong current whose first guess hangs the fibre 2 m clear has none either (Newton's
+  method stalls on it for 2000 iterations; refused so in 18 ms), and 5 m leaves room for a current that lowers the
+  fibre further; the 26 scenes with an equilibrium the wider trigger adds on the statics benchmark cost 0.5 % more
+  Newton iterations (weighted by nodes) over its 1000 scenes.
+  Otherwise, where the first guess lays the fibre within ``GUESS_NEAR_SEABED_M``, the coarse equilibrium is solved
+  before the fine lines, and where it rests ``REFUSED_FROM_NODES`` or more fibre nodes on the seabed the scene is
+  refused (:class:`~moor_env.errors.NoEquilibrium`) without solving the fine lines.
   Why: the fine lines of such a scene mostly do not converge (the fibre lying on the seabed in current is nearly
   free sideways), so a solve of them runs into its budgets before the scene is refused. The numbers were measured on
   the statics benchmark's scenes (``benchmarks/statics.py``, 1000 drawn, seed 0), of which 876 are valid with lines
@@ -71,6 +75,7 @@ MIDDLE_PRESET = "default"  # the second start's, for lines finer than its own (C
 FIRST_TRY_ITERATIONS = 200  # Newton iterations from the first guess before the coarse start is tried
 GUESS_NEAR_SEABED_M = 1.0  # a first guess with the fibre this close to the seabed has the coarse solve go first
 REFUSED_FROM_NODES = 2  # fibre nodes of the coarse equilibrium on the seabed that refuse the scene at once
+PROBE_NEAR_SEABED_M = 5.0  # a first guess with the fibre this close to the seabed has the probe solved first [m]
 PROBE_ITERATIONS = 100  # Newton iterations of the equilibrium with the fibre through the seabed at most
 PROBE_DIP_M = 0.5  # how far the fibre must dip below the seabed in it to refuse the scene
 
@@ -168,23 +173,24 @@ class CoarseStart:
 
     def refuse_fibre_on_seabed(self) -> None:
         """Refuse the scene at once where the first guess (the simulator's state) lays the fibre rope within
-        ``GUESS_NEAR_SEABED_M`` of the seabed and either the coarse compile's equilibrium with the seabed bearing no
-        fibre dips the fibre through it (:meth:`_fibre_dip_through_seabed`) or the coarse equilibrium rests
-        ``REFUSED_FROM_NODES`` or more fibre nodes on it (module docstring); the latter only where the lines are
-        finer than the coarse ones.
+        ``PROBE_NEAR_SEABED_M`` of the seabed and the coarse compile's equilibrium with the seabed bearing no fibre
+        dips the fibre through it (:meth:`_fibre_dip_through_seabed`), or within ``GUESS_NEAR_SEABED_M`` and the
+        coarse equilibrium rests ``REFUSED_FROM_NODES`` or more fibre nodes on it, the latter only where the lines
+        are finer than the coarse ones (module docstring).
 
         Raises
         ------
         moor_env.errors.NoEquilibrium
         """
-        if fibre_on_seabed(self.sim)[1] > GUESS_NEAR_SEABED_M:
+        height = fibre_on_seabed(self.sim)[1]
+        if height > PROBE_NEAR_SEABED_M:
             return
         dip = self._fibre_dip_through_seabed()
         if dip is not None:
             raise fibre_refusal(self.sim, f"{dip[0]} of its nodes, the lowest {-dip[1]:.3g} m under it, in the "
                                           f"equilibrium with the seabed bearing no fibre, at the {self.preset} "
                                           f"preset's segment lengths where finer")
-        if self.keys is None:
+        if self.keys is None or height > GUESS_NEAR_SEABED_M:
             return
         coarse = self.equilibrium()
         resting = 0 if coarse is None else fibre_on_seabed(coarse.simulator)[0]

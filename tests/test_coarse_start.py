@@ -121,3 +121,30 @@ def test_chain_the_seabed_bears_keeps_a_clear_fibre_from_being_refused(monkeypat
     monkeypatch.setattr(coarse_module, "_fibre_through_seabed_and_contact_off", bears_nothing)
     resting, lowest_m = _coarse_start(model)._fibre_dip_through_seabed()
     assert resting >= 1 and lowest_m < -PROBE_DIP_M
+
+
+# A scene of the envs' resolution (statics_env_resolution benchmark, seed 7), rounded: strong current, the fast
+# preset's lines with 1 m chain; its first guess hangs the fibre rope 2 m above the seabed, and Newton's method from
+# it stalls for 2000 iterations.
+FIBRE_TWO_METRES_CLEAR_IN_THE_GUESS = {
+    "water_depth_m": 1276.93, "vessel_spacing_m": 458.91, "mooring_line_length_m": 1615.01,
+    "vertical_chain_length_m": 55.85, "drop_height_m": 51.3, "current_scale": 1.3827, "current_direction_deg": 145.16,
+    "anchor_mass_scale": 1.0358, "fidelity": "fast", "discretization.fit_to_geometry": False,
+    "discretization.vertical_chain_segment_m": 1.0, "discretization.loop_chain_segment_m": 1.0,
+    "discretization.fibre_segment_m": 50.0, "discretization.wire_segment_m": 100.0}
+
+
+def test_fibre_the_guess_hangs_a_little_clear_is_refused_from_the_probe():
+    """Reference: the first guess hangs the fibre rope between ``GUESS_NEAR_SEABED_M`` and ``PROBE_NEAR_SEABED_M``
+    above the seabed (so only the probe is tried), and the equilibrium with the seabed bearing no fibre dips the
+    fibre through it: ``solve_statics`` refuses the scene for its fibre from that equilibrium, not after its own
+    lines' solve."""
+    from moor_env.coarse_start import GUESS_NEAR_SEABED_M, PROBE_NEAR_SEABED_M
+    from moor_env.physics.statics_checks import fibre_on_seabed
+
+    model = compile_scene(load_scene("gjoa-500", FIBRE_TWO_METRES_CLEAR_IN_THE_GUESS))
+    start = _coarse_start(model)
+    assert GUESS_NEAR_SEABED_M < fibre_on_seabed(start.sim)[1] <= PROBE_NEAR_SEABED_M
+    with pytest.raises(NoEquilibrium) as refused:
+        solve_statics(model, progress=False, method="newton")
+    assert "the seabed bearing no fibre" in refused.value.cause
