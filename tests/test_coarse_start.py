@@ -13,6 +13,7 @@ from moor_env.compile import compile_scene
 from moor_env.errors import NoEquilibrium
 from moor_env.fidelity import fidelity_presets
 from moor_env.physics import layout as L
+from tests.test_simulation import ONE_COARSE_FIBRE_NODE
 
 # the fast preset fitted to this scene makes the loop chain finer than the preset's own (0.5 m against 2 m) and the
 # fibre rope and the wire coarser (50 m and 100 m against 20 m and 30 m)
@@ -45,12 +46,9 @@ def test_no_coarse_compile_for_lines_no_finer_than_the_preset():
 # a long mooring line in calm water whose fibre rope rests on the seabed in the scene's own equilibrium
 FIBRE_ON_THE_SEABED = {"mooring_line_length_m": 750.0, "vessel_spacing_m": 60.0, "current_scale": 0.0}
 
-# The statics benchmark's scene 423 (seed 0), rounded: it converges with the fibre rope a few centimetres clear of
-# the seabed, and its first guess lays the loop's chain on the seabed.
-FIBRE_CLEAR_WITH_THE_CHAIN_ON_THE_SEABED = {
-    "water_depth_m": 1361.78, "vessel_spacing_m": 465.83, "mooring_line_length_m": 1611.93,
-    "vertical_chain_length_m": 12.44, "drop_height_m": 50.37, "current_scale": 0.36, "current_direction_deg": 133.85,
-    "anchor_mass_scale": 0.9255, "fidelity": "default"}
+# The statics benchmark's scene 423 (tests/test_simulation.py): it converges with the fibre rope a few centimetres
+# clear of the seabed, and its first guess lays the loop's chain on the seabed.
+FIBRE_CLEAR_WITH_THE_CHAIN_ON_THE_SEABED = ONE_COARSE_FIBRE_NODE
 
 
 def _coarse_start(model):
