@@ -2,7 +2,7 @@
 ``COARSE_PRESET`` preset's at that preset's segment lengths, the others at their own
 (``moor_env.simulation.solve_statics``).
 
-It serves twice, solved at most once per solve (:class:`CoarseStart`):
+It serves three ways, each solved at most once per solve (:class:`CoarseStart`):
 
 - **Refusal at once.** Where the first guess lays the fibre rope within ``PROBE_NEAR_SEABED_M`` of the seabed, the
   coarse compile is solved with the seabed bearing every line but the fibre (and without the line-anchor contact),
@@ -149,17 +149,21 @@ class CoarseStart:
         """The fibre rope below the seabed in the coarse compile's equilibrium with the seabed bearing every line but
         the fibre rope and without the line-anchor contact (``PROBE_ITERATIONS`` at most, from its first guess): its
         nodes below the seabed and the lowest one's height above it [m], where that lies more than ``PROBE_DIP_M``
-        below it; None otherwise (the solve not converged, or no fibre rope, included).
+        below it; None otherwise (the solve not converged included), and without a solve where the scene has no
+        fibre rope or its material is another line's too.
 
         Why this refuses the scene: an equilibrium of the scene that hangs the fibre clear of the seabed is an
         equilibrium of this problem too (the seabed bears nothing of the fibre in it). The one found dips the fibre
-        through the seabed, so the scene's own equilibrium rests the fibre on the seabed. That takes this problem
-        to have that one equilibrium, the coarse lines to hang as the fine ones, and the anchor's contact to move
-        the loop's chain and not the fibre; on the benchmarks' scenes, no scene with an equilibrium is refused so.
-        It is the lighter problem: no seabed contact to settle for a nearly weightless rope, no contact with the
-        anchor."""
+        through the seabed, so the scene has no equilibrium with the fibre clear of it, and an equilibrium with the
+        fibre on the seabed is refused anyway (``statics_checks.check_fibre_clearance``). That takes this problem to
+        have that one equilibrium, and three approximations: the coarse lines hang as the fine ones, the wire keeps
+        its first guess's length (the drop-height corrections change it by centimetres to decimetres), and the
+        anchor's contact, left out, moves the loop's chain and not the fibre. ``PROBE_DIP_M`` is the margin for them
+        (a dip of any depth would refuse by the argument itself); on the benchmarks' scenes no scene with an
+        equilibrium is refused so. It is the lighter problem: no seabed contact to settle for a nearly weightless
+        rope, no contact with the anchor."""
         probe = Simulator(self._coarse_model())
-        if fibre_material(probe.model) < 0:
+        if not _fibre_alone_in_its_material(probe.model):
             return None
         try:
             first_guess(probe)
@@ -252,12 +256,26 @@ def _fibre_through_seabed_and_contact_off(model: Model):
     """The model's seabed bearing nothing of the fibre rope (its ``MF_SEABED_D`` 0) and its line-anchor contact off
     for the block, both restored whatever it raises."""
     fibre = fibre_material(model)
+    if fibre < 0:
+        raise ValueError("the model has no fibre rope")
     bearing, contact = model.mat_f[fibre, L.MF_SEABED_D], model.contact_f[L.CF_ON]
     model.mat_f[fibre, L.MF_SEABED_D], model.contact_f[L.CF_ON] = 0.0, 0.0
     try:
         yield
     finally:
         model.mat_f[fibre, L.MF_SEABED_D], model.contact_f[L.CF_ON] = bearing, contact
+
+
+def _fibre_alone_in_its_material(model: Model) -> bool:
+    """Whether the model has a fibre rope whose material no other line's active segment shares (the probe without
+    the fibre's seabed lets every segment of that material through the seabed)."""
+    fibre = fibre_material(model)
+    if fibre < 0:
+        return False
+    seg_i = model.seg_i
+    shared = ((seg_i[:, L.SI_ACTIVE] == 1) & (seg_i[:, L.SI_MAT] == fibre)
+              & (seg_i[:, L.SI_LINE] != model.lines["mooring_line"].index))
+    return not shared.any()
 
 
 def _fibre_refusal(resting: int, fine: Simulator, preset: str) -> NoEquilibrium | None:

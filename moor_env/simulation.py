@@ -79,11 +79,12 @@ def _secant_gain(gain: float, last: tuple[float, float] | None, err: float) -> f
 
 
 def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool, finer: CoarseStart | None = None):
-    """:func:`solve_equilibrium` by ``method``. Where the lines are finer than the coarse start's
-    (``moor_env.coarse_start``) and ``checks``, a scene whose first guess lays the fibre rope near the seabed and
-    whose coarse equilibrium rests several fibre nodes on it is refused first
-    (:meth:`CoarseStart.refuse_fibre_on_seabed`); then Newton's method from the first guess gets
-    ``FIRST_TRY_ITERATIONS``, then the coarse start (:meth:`CoarseStart.start`, the fast preset's equilibrium, then
+    """:func:`solve_equilibrium` by ``method``. With ``checks``, a scene whose first guess lays the fibre rope near
+    the seabed is refused first where the coarse compile's equilibrium with the seabed bearing no fibre dips the
+    fibre through it or, for lines finer than the coarse start's (``moor_env.coarse_start``), where the coarse
+    equilibrium rests several fibre nodes on it (:meth:`CoarseStart.refuse_fibre_on_seabed`); then Newton's method
+    from the first guess gets ``FIRST_TRY_ITERATIONS`` (lines finer than the coarse start's; others the full
+    ``MAX_ITERATIONS`` at once), then the coarse start (:meth:`CoarseStart.start`, the fast preset's equilibrium, then
     the default preset's for lines finer than that; a refusal either start left pending is raised where both
     fail, the fast preset's unless the default preset's equilibrium hangs the fibre clear), then the first guess
     again with ``MAX_ITERATIONS``; the relaxation fallback last. Where the default preset's start follows, the fast

@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import functools
 
+import numpy as np
 import pytest
 
 from moor_env import load_scene, solve_statics
@@ -45,6 +46,7 @@ def test_no_coarse_compile_for_lines_no_finer_than_the_preset():
 
 # a long mooring line in calm water whose fibre rope rests on the seabed in the scene's own equilibrium
 FIBRE_ON_THE_SEABED = {"mooring_line_length_m": 750.0, "vessel_spacing_m": 60.0, "current_scale": 0.0}
+FAST_UNFITTED = {"fidelity": "fast", "discretization.fit_to_geometry": False}  # no line finer than the fast preset's
 
 # The statics benchmark's scene 423 (tests/test_simulation.py): it converges with the fibre rope a few centimetres
 # clear of the seabed, and its first guess lays the loop's chain on the seabed.
@@ -92,7 +94,51 @@ def test_equilibrium_with_the_fibre_through_the_seabed_refuses_a_fibre_it_dips_t
     assert "the seabed bearing no fibre" in refused.value.cause and "fast preset" in refused.value.cause
     assert len(solved) == 1 and solved[0][0] < model.node_i.shape[0]
     assert solved[0][1:] == (0.0, 0.0)
-    assert model.contact_f[L.CF_ON] != 0.0  # restored
+
+
+def _probe_arrays(model):
+    """The model arrays the probe changes for its solve: the material table and the contact's parameters."""
+    return model.mat_f.copy(), model.contact_f.copy()
+
+
+@pytest.mark.parametrize("fails", [False, True])
+def test_probe_restores_the_model_it_solves(monkeypatch, fails):
+    """Reference: the arrays of the model the probe solves before it. The probe sets the fibre's seabed width and the
+    line-anchor contact to 0 for its solve and puts both back after it, whether the solve returns or raises: on the
+    coarse compile, and on the scene's own model where no line is finer than the fast preset's (a model the caller
+    goes on to solve)."""
+    from moor_env import coarse_start as coarse_module
+    from moor_env.errors import StaticsNotConverged
+
+    if fails:
+        def stalls(sim, **kwargs):
+            assert sim.model.mat_f[coarse_module.fibre_material(sim.model), L.MF_SEABED_D] == 0.0
+            raise StaticsNotConverged("stalled", 1.0)
+
+        monkeypatch.setattr(coarse_module, "solve_equilibrium", stalls)
+    for scene in (FIBRE_ON_THE_SEABED, {**FIBRE_ON_THE_SEABED, **FAST_UNFITTED}):
+        start = _coarse_start(compile_scene(load_scene("gjoa-500", scene)))
+        model = start._coarse_model()
+        assert (model is start.sim.model) == (scene is not FIBRE_ON_THE_SEABED)
+        before = _probe_arrays(model)
+        dip = start._fibre_dip_through_seabed()
+        assert (dip is None) == fails
+        for saved, now in zip(before, _probe_arrays(model), strict=True):
+            np.testing.assert_array_equal(now, saved)
+
+
+def test_probe_is_not_solved_where_the_fibre_material_is_another_lines_too(monkeypatch):
+    """Reference: the probe's problem lets every segment of the fibre's material through the seabed, so it is not
+    the scene's without the fibre's seabed where another line has segments of that material: no solve then."""
+    from moor_env import coarse_start as coarse_module
+    from moor_env.physics.statics_checks import fibre_material
+
+    model = compile_scene(load_scene("gjoa-500", {**FIBRE_ON_THE_SEABED, **FAST_UNFITTED}))
+    assert _coarse_start(model)._fibre_dip_through_seabed() is not None
+    wire = model.lines["wire"].index
+    model.seg_i[np.nonzero(model.seg_i[:, L.SI_LINE] == wire)[0][0], L.SI_MAT] = fibre_material(model)
+    monkeypatch.setattr(coarse_module, "solve_equilibrium", lambda *a, **k: pytest.fail("the probe was solved"))
+    assert _coarse_start(model)._fibre_dip_through_seabed() is None
 
 
 def test_chain_the_seabed_bears_keeps_a_clear_fibre_from_being_refused(monkeypatch):
@@ -133,10 +179,10 @@ FIBRE_TWO_METRES_CLEAR_IN_THE_GUESS = {
 
 
 def test_fibre_the_guess_hangs_a_little_clear_is_refused_from_the_probe():
-    """Reference: the first guess hangs the fibre rope between ``GUESS_NEAR_SEABED_M`` and ``PROBE_NEAR_SEABED_M``
-    above the seabed (so only the probe is tried), and the equilibrium with the seabed bearing no fibre dips the
-    fibre through it: ``solve_statics`` refuses the scene for its fibre from that equilibrium, not after its own
-    lines' solve."""
+    """Reference (not run here: about 9 s): the relaxation solver refuses the unrounded scene for its fibre rope on
+    the seabed. The first guess hangs the fibre between ``GUESS_NEAR_SEABED_M`` and ``PROBE_NEAR_SEABED_M`` above
+    the seabed (so only the probe is tried), and ``solve_statics`` refuses the scene for its fibre from the
+    equilibrium with the seabed bearing no fibre, not after its own lines' solve (which stalls)."""
     from moor_env.coarse_start import GUESS_NEAR_SEABED_M, PROBE_NEAR_SEABED_M
     from moor_env.physics.statics_checks import fibre_on_seabed
 
