@@ -72,7 +72,7 @@ if TYPE_CHECKING:
 
 COARSE_PRESET = "fast"  # the preset whose segment lengths the coarse compile takes
 MIDDLE_PRESET = "default"  # the second start's, for lines finer than its own (CoarseStart.start)
-FIRST_TRY_ITERATIONS = 200  # Newton iterations from the first guess before the coarse start is tried
+FIRST_TRY_ITERATIONS = 150  # Newton iterations from the first guess before the coarse start is tried
 GUESS_NEAR_SEABED_M = 1.0  # a first guess with the fibre this close to the seabed has the coarse solve go first
 REFUSED_FROM_NODES = 2  # fibre nodes of the coarse equilibrium on the seabed that refuse the scene at once
 PROBE_NEAR_SEABED_M = 5.0  # a first guess with the fibre this close to the seabed has the probe solved first [m]
