@@ -94,22 +94,21 @@ def _equilibrium(sim: Simulator, progress: bool, method: str, checks: bool, fine
     from the guess (where it rests fibre nodes, the start from it has a refusal pending, and the guess may still
     reach an equilibrium with the fibre clear).
 
-    Why that order: a solve from the first guess that has not converged in a hundred iterations or two mostly
-    stalls (with the loop resting against the anchor in current); from the coarse start most of those converge
-    in fewer iterations than the stalled solve has already taken. Why 150 for the first try: on the statics
-    benchmark's scenes the first tries that converged took 140 iterations at most without the line-anchor contact
-    and 122 with it; against 200, the budget lost on the others is a quarter shorter, which takes 3 % off the
-    Newton iterations (weighted by nodes) over the 1000 scenes and 15 % off the slowest scene's (4 % and 10 % at
-    the p99 on the envs' resolution's), with no outcome changed on either; 120 cuts off a first try that converges
-    in 122, and its scene (no equilibrium) is refused after the coarse start instead, at three times the cost.
-    Why not the coarse start first: on most scenes
-    it costs more than the first guess (its compile and solve, and tens of Newton iterations for the sag). Why the
-    fast preset's start gets only its softened try where the default preset's follows: on the statics benchmark,
-    every fine solve that converged from the fast preset's equilibrium did so within that try (9-240 iterations),
-    while the two that went on to the full budget did not converge in it (0.36 and 0.50 s) and then converged from
-    the default preset's. Why the default preset's lines start from the fast preset's equilibrium when they are
-    the start of finer lines: the finer lines did not converge from the first guess, and the default preset's lines
-    did not either in any of the eight such solves on the two statics benchmarks' scenes."""
+    Why that order: a solve from the first guess that has not converged in a hundred iterations or two mostly stalls
+    (with the loop resting against the anchor in current); from the coarse start most of those converge in fewer
+    iterations than the stalled solve has already taken. Why 150 for the first try: on the statics benchmark's
+    scenes the first tries that converged took 140 iterations at most without the line-anchor contact and 122 with
+    it; against 200, the budget lost on the others is a quarter shorter, which takes 3 % off the Newton iterations
+    (weighted by nodes) over the 1000 scenes and 15 % off the slowest scene's (4 % and 10 % at the p99 on the envs'
+    resolution's), with no outcome changed on either; 120 cuts off a first try that converges in 122, and its scene
+    (no equilibrium) is refused after the coarse start instead, at three times the cost. Why not the coarse start
+    first: on most scenes it costs more than the first guess (its compile and solve, and tens of Newton iterations
+    for the sag). Why the fast preset's start gets only its softened try where the default preset's follows: on the
+    statics benchmark, every fine solve that converged from the fast preset's equilibrium did so within that try
+    (9-240 iterations), while the two that went on to the full budget did not converge in it (0.36 and 0.50 s) and
+    then converged from the default preset's. Why the default preset's lines start from the fast preset's
+    equilibrium when they are the start of finer lines: the finer lines did not converge from the first guess, and
+    the default preset's lines did not either in any of the eight such solves on the two statics benchmarks' scenes."""
     if method == "relaxation":
         return solve_equilibrium(sim, progress=progress, method=method)
     solve = functools.partial(_coarse_solve, progress=progress)
