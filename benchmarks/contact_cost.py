@@ -86,9 +86,9 @@ def solves_per_step(sim, saved) -> dict:
             assemble(sim.dt, it == 0, body_node, model, state, orow)
             if contact:
                 ic.assemble_contact(sim.dt, model, state)
-            imp.eliminate(sim.dt, nq, model, state, tree, orow)
+            imp.eliminate(nq, state, tree, orow)
             imp.couple_body(sim.dt, body_node, model, state)
-            imp.back_substitute(sim.dt, nq, model, state, tree, orow)
+            imp.back_substitute(nq, state, tree, orow)
             changed = update_active_set(sim.dt, model, state, orow)
             changed_contact = ics.update_contact_set(sim.dt, model, state) if contact else 0
             contact_solves += changed_contact > 0 and it + 1 < imp.MAX_ACTIVE_SET_SOLVES

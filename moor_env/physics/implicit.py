@@ -54,16 +54,17 @@ the same bit for bit (tested). A closed loop of lines is refused at compile time
 
 Scratch memory (no allocation per step): the step reuses the state record's work arrays. ``node_mm`` holds the
 diagonal blocks and, after elimination, their inverses; ``node_acc`` the right-hand sides and finally dv/h (the
-effective acceleration of the step); ``pos0``/``vel0`` (the RK2 midpoint's scratch, otherwise unused) are viewed as
-int64 for the tree ordering and the active set, and keep the ordering between steps. ``node_force``,
-``node_mass``, ``node_contact`` and ``seg_tension`` keep the loads at the start of the step, as after an explicit
-step (the step evaluates them with ``compute_loads``: the explicit node accelerations would only be overwritten);
-``node_mm`` does not hold the added mass afterwards: call ``compute_accelerations`` (the simulator's
-``evaluate_loads``) for loads, as every output already does.
+effective acceleration of the step); ``node_base`` the part of the blocks and right-hand sides that the active set
+leaves unchanged, which a step's later solves start from (``implicit_assembly.assemble``); ``seg_gain`` each
+segment's block G_s of the present solve, for the elimination and the back substitution; ``pos0``/``vel0`` (the RK2
+midpoint's scratch, otherwise unused) are viewed as int64 for the tree ordering and the active set, and keep the
+ordering between steps. ``node_force``, ``node_mass``, ``node_contact`` and ``seg_tension`` keep the loads at the
+start of the step, as after an explicit step (the step evaluates them with ``compute_loads``: the explicit node
+accelerations would only be overwritten); ``node_mm`` does not hold the added mass afterwards: call
+``compute_accelerations`` (the simulator's ``evaluate_loads``) for loads, as every output already does.
 
-Cost (``benchmarks/bench_implicit_step.py``, ~110 active segments): about 15 us per step with one solve, in
-roughly equal parts loads, assembly and elimination with back substitution. The kernels use ``jit_step``
-(numpy's error model): without a zero test before every division they are ~30 % faster.
+Cost: ``benchmarks/bench_implicit_step.py`` times each piece of a step (``docs/implicit-step.md``). The kernels use
+``jit_step`` (numpy's error model): without a zero test before every division they are ~30 % faster.
 """
 
 from __future__ import annotations
@@ -73,7 +74,7 @@ import numpy as np
 from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.anchor import body_acceleration, rotate_axis
 from moor_env.physics.contact import record_contact_force
-from moor_env.physics.implicit_active_set import init_active_set, segment_gain, update_active_set
+from moor_env.physics.implicit_active_set import init_active_set, update_active_set
 from moor_env.physics.implicit_assembly import assemble
 from moor_env.physics.implicit_contact import any_law, assemble_contact, contact_reaction
 from moor_env.physics.implicit_contact_set import init_contact_set, update_contact_set
@@ -125,38 +126,37 @@ def prepare(reuse_order, body_node, state, tree, orow):
 
 
 @jit_no_refcount
-def eliminate(h, nq, model, state, tree, orow):
-    """Forward elimination, leaves first: node_mm <- D^-1, node_acc <- y = D^-1 r; Schur terms into parents."""
-    node_pos, seg_i, seg_f, seg_tension = state.node_pos, state.seg_i, state.seg_f, state.seg_tension
-    seg_chord = state.seg_chord
-    node_mm, node_acc, mat_f = state.node_mm, state.node_acc, model.mat_f
+def eliminate(nq, state, tree, orow):
+    """Forward elimination, leaves first: node_mm <- D^-1, node_acc <- y = D^-1 r; Schur terms into parents, each
+    segment's block G_s as the assembly kept it (``state.seg_gain``)."""
+    node_mm, node_acc, seg_gain = state.node_mm, state.node_acc, state.seg_gain
     for k in range(nq):
         c = orow[k, OR_ORDER]
         invert_block(node_mm, node_acc, c)
         if tree[c, TR_DEG] != -1:
             continue
-        alpha, beta, qx, qy, qz, kq, kt = segment_gain(tree[c, TR_SEG], h, orow, node_pos, seg_i, seg_f, mat_f,
-                                                       seg_tension, seg_chord)
+        s = tree[c, TR_SEG]
+        alpha, beta = seg_gain[s, 0], seg_gain[s, 1]
         if alpha == 0.0 and beta == 0.0:
             continue
-        schur_into_parent(node_mm, node_acc, c, tree[c, TR_NB], alpha, beta, qx, qy, qz)
+        schur_into_parent(node_mm, node_acc, c, tree[c, TR_NB], alpha, beta, seg_gain[s, 2], seg_gain[s, 3],
+                          seg_gain[s, 4])
 
 
 @jit_no_refcount
-def back_substitute(h, nq, model, state, tree, orow):
+def back_substitute(nq, state, tree, orow):
     """Root first: dv_c = y_c + D_c^-1 G dv_parent (node_acc <- dv)."""
-    node_pos, seg_i, seg_f, seg_tension = state.node_pos, state.seg_i, state.seg_f, state.seg_tension
-    seg_chord = state.seg_chord
-    node_mm, node_acc, mat_f = state.node_mm, state.node_acc, model.mat_f
+    node_mm, node_acc, seg_gain = state.node_mm, state.node_acc, state.seg_gain
     for k in range(nq - 1, -1, -1):
         c = orow[k, OR_ORDER]
         if tree[c, TR_DEG] != -1:
             continue
-        alpha, beta, qx, qy, qz, kq, kt = segment_gain(tree[c, TR_SEG], h, orow, node_pos, seg_i, seg_f, mat_f,
-                                                       seg_tension, seg_chord)
+        s = tree[c, TR_SEG]
+        alpha, beta = seg_gain[s, 0], seg_gain[s, 1]
         if alpha == 0.0 and beta == 0.0:
             continue
-        back_from_parent(node_mm, node_acc, c, tree[c, TR_NB], alpha, beta, qx, qy, qz)
+        back_from_parent(node_mm, node_acc, c, tree[c, TR_NB], alpha, beta, seg_gain[s, 2], seg_gain[s, 3],
+                         seg_gain[s, 4])
 
 
 @jit_step
@@ -285,10 +285,10 @@ def implicit_euler_update(model, state, h, reuse_order):
         assemble(h, it == 0, body_node, model, state, orow)
         if contact and any_law(state.contact_set, state.segment_set):
             assemble_contact(h, model, state)
-        eliminate(h, nq, model, state, tree, orow)
+        eliminate(nq, state, tree, orow)
         if body_node >= 0:
             c0, c1, c2, c3, c4, c5 = couple_body(h, body_node, model, state)
-        back_substitute(h, nq, model, state, tree, orow)
+        back_substitute(nq, state, tree, orow)
         changed = update_active_set(h, model, state, orow)
         if contact:
             changed += update_contact_set(h, model, state)

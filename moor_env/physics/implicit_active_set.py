@@ -17,7 +17,7 @@ import numpy as np
 
 from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.layout import MF_EA, SF_L0, SI_A, SI_ACTIVE, SI_B, SI_MAT
-from moor_env.physics.line import axial_derivatives, axial_tension_n, segment_axis
+from moor_env.physics.line import axial_tension_n, segment_axis
 from moor_env.physics.tree import OR_EFF, OR_FLAGS
 
 SET_TOLERANCE = 1e-6  # strain by which a segment must miss its predicted set before the step is solved again
@@ -50,30 +50,6 @@ def _flip(orow, s):
     """Toggle the active bit of segment s and freeze it for the rest of the step."""
     orow[s >> 5, OR_FLAGS] ^= np.int64(1) << (2 * (s & 31))
     orow[s >> 5, OR_FLAGS] |= np.int64(1) << (2 * (s & 31) + 1)
-
-
-@jit_step
-def segment_gain(s, h, orow, node_pos, seg_i, seg_f, mat_f, seg_tension, seg_chord):
-    """G_s = h C_s + h^2 K_s = alpha q q^T + beta I of an active segment, with its unit tangent.
-
-    Returns (alpha, beta, qx, qy, qz, kq, kt), with K_s = kq q q^T + kt (I - q q^T) [N/m]; zeros for a
-    segment outside the active set. A re-linearised segment (``seg_chord``) has them at its predicted end chord.
-    """
-    if is_active(orow, s) == 0:
-        return 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0
-    a = seg_i[s, SI_A]
-    b = seg_i[s, SI_B]
-    m = seg_i[s, SI_MAT]
-    l0 = seg_f[s, SF_L0]
-    kq, cq = axial_derivatives(mat_f, m, l0)
-    if seg_chord[s, 3] != 0.0:
-        length, qx, qy, qz, kt = chord_point(s, seg_chord, kq, l0)
-    else:
-        length, qx, qy, qz = segment_axis(node_pos, a, b)
-        kt = seg_tension[s] / length
-    alpha = h * cq + h * h * (kq - kt)
-    beta = h * h * kt
-    return alpha, beta, qx, qy, qz, kq, kt
 
 
 @jit_step

@@ -79,15 +79,12 @@ def add_point_loads(n, node_f, node_pos, node_vel, env_f, current_profile, node_
 
 
 @jit_step
-def add_point_loads_dv(node_mm, e, n, h, added_mass, node_f, node_pos, node_vel, env_f, current_profile):
+def add_point_loads_dv(node_mm, e, n, h, node_f, node_pos, node_vel, env_f, current_profile):
     """Add h times the velocity Jacobian of node n's point drag (-df/dv, see the module docstring) to the 3x3 block
-    ``node_mm[e]`` of the unknown that carries node n (itself, or its parent if welded), and, with
-    ``added_mass``, its added mass (the implicit step's later solves rebuild the blocks)."""
+    ``node_mm[e]`` of the unknown that carries node n (itself, or its parent if welded)."""
     if not has_point_load(node_f, n):
         return
     rho = env_f[EF_RHO]
-    if added_mass:
-        _add_isotropic(node_mm, e, point_added_mass(node_f, n, rho))
     cda = node_f[n, NF_POINT_CDA]
     if cda > 0.0:
         rx, ry, rz = point_relative_velocity(n, node_pos, node_vel, env_f, current_profile)

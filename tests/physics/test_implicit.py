@@ -20,6 +20,7 @@ from moor_env.physics import implicit_active_set as S
 from moor_env.physics import layout as L
 from moor_env.physics import tree as T
 from moor_env.physics.implicit_assembly import assemble
+from moor_env.physics.line import segment_damping_n_s_m
 from moor_env.physics.records import ModelRecord, StateRecord
 from moor_env.simulation import run_drop
 
@@ -107,6 +108,21 @@ def test_a_closed_loop_of_lines_is_refused():
         stable_time_step(arrays, "implicit_euler")
 
 
+def _segment_block(s, h, st, m, w):
+    """G_s = h C_s + h^2 K_s of segment s of the step's first active set, from its definition (``physics/implicit.py``):
+    K_s = EA/l0 q q^T + T/len (I - q q^T), C_s = BA/l0 q q^T at the segment's present axis; zero where it is slack."""
+    if w.seg_tension[s] <= 0.0:
+        return np.zeros((3, 3))
+    a, b, mat = st.seg_i[s, L.SI_A], st.seg_i[s, L.SI_B], st.seg_i[s, L.SI_MAT]
+    chord = st.node_pos[b] - st.node_pos[a]
+    length = np.linalg.norm(chord)
+    q = chord / length
+    kq = m.mat_f[mat, L.MF_EA] / st.seg_f[s, L.SF_L0]
+    kt = w.seg_tension[s] / length
+    cq = segment_damping_n_s_m(m.mat_f, mat)
+    return (h * cq + h * h * (kq - kt)) * np.outer(q, q) + h * h * kt * np.eye(3)
+
+
 def test_tree_solver_matches_a_dense_solve():
     """One linear solve of the step on gjoa-500 before release (three lines at the release point, the release unit
     welded to it, the anchor as root) in a disturbed state: the leaves-first block elimination with the anchor
@@ -134,13 +150,14 @@ def test_tree_solver_matches_a_dense_solve():
     for s in np.nonzero(st.seg_i[:, L.SI_ACTIVE])[0]:
         a, b = eff[st.seg_i[s, L.SI_A]], eff[st.seg_i[s, L.SI_B]]
         if a >= 0 and b >= 0 and a != b:
-            alpha, beta, qx, qy, qz, _, _ = S.segment_gain(s, h, orow, st.node_pos, st.seg_i, st.seg_f, m.mat_f,
-                                                           w.seg_tension, w.seg_chord)
-            q = np.array([qx, qy, qz])
-            edges.append((a, b, alpha * np.outer(q, q) + beta * np.eye(3)))
-    I.eliminate(h, nq, model, state, tree, orow)
+            gain = _segment_block(s, h, st, m, w)
+            g = w.seg_gain[s]  # the block the assembly kept for the elimination
+            np.testing.assert_allclose(g[0] * np.outer(g[2:], g[2:]) + g[1] * np.eye(3), gain, rtol=1e-12,
+                                       atol=1e-12 * max(np.abs(gain).max(), 1.0))
+            edges.append((a, b, gain))
+    I.eliminate(nq, state, tree, orow)
     corr = np.array(I.couple_body(h, body_node, model, state))
-    I.back_substitute(h, nq, model, state, tree, orow)
+    I.back_substitute(nq, state, tree, orow)
 
     def sym(v):
         return np.array([[v[0], v[3], v[4]], [v[3], v[1], v[5]], [v[4], v[5], v[2]]])
