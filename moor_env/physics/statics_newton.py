@@ -179,6 +179,7 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
     saved_step = np.empty((nn, 3))
     saved_dq = np.zeros(5)
     basis = np.zeros((2, 3))
+    saved_basis = np.zeros((2, 3))
     res_body = np.zeros(5)
     dq = np.zeros(5)
     axis0 = np.zeros(3)
@@ -197,7 +198,7 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
     saved_contact = step_contact
     cap = ctl[C_CAP] if ctl[C_CAP] > 0.0 else ctl[C_MAX_STEP]
     cuts = int(ctl[C_CUTS])
-    for _ in range(max_iter):
+    for it in range(max_iter):
         if not (worst == worst) or not (size == size):
             status = STATUS_NONFINITE
             break
@@ -215,6 +216,7 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
             scale = cap / size
         saved[:, :] = node_pos
         saved_body[:] = body_state
+        saved_basis[:, :] = basis
         saved_step[:, :] = node_acc
         saved_dq[:] = dq
         # no node predicted inside the anchor by the step's solve: nothing to slide, no planning cost
@@ -251,8 +253,11 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
         ctl[C_REJECTED] += 1.0
         node_pos[:, :] = saved
         body_state[:] = saved_body
-        norm2, worst = residual(model, state, body_node, basis, res_body)
         cuts += 1
+        if cuts > LINE_SEARCH_CUTS or it == max_iter - 1:  # the solve at a cut tau, or the next call, reads the loads
+            norm2, worst = residual(model, state, body_node, basis, res_body)
+        else:  # norm2 and worst are still the state's; a shorter try of the step evaluates its own loads
+            basis[:, :] = saved_basis
         if cuts <= LINE_SEARCH_CUTS:
             node_acc[:, :] = saved_step
             dq[:] = saved_dq
