@@ -58,6 +58,16 @@ def assemble(h, first, body_node, model, state, orow):
     _add_springs(h, model, state, orow)
 
 
+@jit_step(inline="always")
+def _segment_unknowns(seg_i, orow, s):
+    """Segment s's end nodes and the unknowns that carry them (both -1 where the segment is not active)."""
+    a = seg_i[s, SI_A]
+    b = seg_i[s, SI_B]
+    if seg_i[s, SI_ACTIVE] == 0:
+        return a, b, -1, -1
+    return a, b, orow[a, OR_EFF], orow[b, OR_EFF]
+
+
 @jit_no_refcount
 def _assemble_fixed(h, body_node, model, state, orow):
     """The blocks and right-hand sides without the segments' springs: masses, loads, point loads and seabed, and
@@ -92,12 +102,7 @@ def _assemble_fixed(h, body_node, model, state, orow):
         add_seabed_dv(node_mm, node_acc, e, h, node_pos[n, 2], node_vel[n, 0], node_vel[n, 1], node_vel[n, 2],
                       node_contact[n], env_f)
     for s in range(seg_i.shape[0]):
-        if seg_i[s, SI_ACTIVE] == 0:
-            continue
-        a = seg_i[s, SI_A]
-        b = seg_i[s, SI_B]
-        ea = orow[a, OR_EFF]
-        eb = orow[b, OR_EFF]
+        a, b, ea, eb = _segment_unknowns(seg_i, orow, s)
         if ea < 0 and eb < 0:
             continue
         cn, ct, _, _ = half_segment_morison(mat_f, seg_i[s, SI_MAT], seg_f[s, SF_L0], rho)
@@ -128,13 +133,8 @@ def _add_springs(h, model, state, orow):
     node_mm, node_acc, seg_tension = state.node_mm, state.node_acc, state.seg_tension
     seg_chord, seg_gain = state.seg_chord, state.seg_gain
     for s in range(seg_i.shape[0]):
-        if seg_i[s, SI_ACTIVE] == 0:
-            continue
-        a = seg_i[s, SI_A]
-        b = seg_i[s, SI_B]
-        ea = orow[a, OR_EFF]
-        eb = orow[b, OR_EFF]
-        if ea == eb:  # both prescribed, or a welded node and its parent
+        a, b, ea, eb = _segment_unknowns(seg_i, orow, s)
+        if ea == eb:  # not active, both prescribed, or a welded node and its parent
             continue
         m = seg_i[s, SI_MAT]
         l0 = seg_f[s, SF_L0]
