@@ -180,7 +180,7 @@ def _solve_once(first, stage, h, nq, body_node, model, state, tree, orow):
 
 @jit
 def _loop_solve(k, stage, h, model, state):
-    """``k`` later solves of the first active set at a fixed state (after one first solve), up to ``stage`` (see
+    """``k`` later solves at a fixed state, each from the blocks one first solve kept, up to ``stage`` (see
     :func:`_solve_once`)."""
     tree = state.pos0.view(np.int64)
     orow = state.vel0.view(np.int64)

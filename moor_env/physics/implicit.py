@@ -55,13 +55,14 @@ the same bit for bit (tested). A closed loop of lines is refused at compile time
 Scratch memory (no allocation per step): the step reuses the state record's work arrays. ``node_mm`` holds the
 diagonal blocks and, after elimination, their inverses; ``node_acc`` the right-hand sides and finally dv/h (the
 effective acceleration of the step); ``node_base`` the part of the blocks and right-hand sides that the active set
-leaves unchanged, which a step's later solves start from (``implicit_assembly.assemble``); ``seg_gain`` each
-segment's block G_s of the present solve, for the elimination and the back substitution; ``pos0``/``vel0`` (the RK2
-midpoint's scratch, otherwise unused) are viewed as int64 for the tree ordering and the active set, and keep the
-ordering between steps. ``node_force``, ``node_mass``, ``node_contact`` and ``seg_tension`` keep the loads at the
-start of the step, as after an explicit step (the step evaluates them with ``compute_loads``: the explicit node
-accelerations would only be overwritten); ``node_mm`` does not hold the added mass afterwards: call
-``compute_accelerations`` (the simulator's ``evaluate_loads``) for loads, as every output already does.
+leaves unchanged (all but the springs and the line-anchor contact), which a step's later solves start from
+(``implicit_assembly.assemble``); ``seg_gain`` each segment's block G_s of the present solve, for the elimination
+and the back substitution; ``pos0``/``vel0`` (the RK2 midpoint's scratch, otherwise unused) are viewed as int64 for
+the tree ordering and the active set, and keep the ordering between steps. ``node_force``, ``node_mass``,
+``node_contact`` and ``seg_tension`` keep the loads at the start of the step, as after an explicit step (the step
+evaluates them with ``compute_loads``: the explicit node accelerations would only be overwritten); ``node_mm`` does
+not hold the added mass afterwards: call ``compute_accelerations`` (the simulator's ``evaluate_loads``) for loads,
+as every output already does.
 
 Cost: ``benchmarks/bench_implicit_step.py`` times each piece of a step (``docs/implicit-step.md``). The kernels use
 ``jit_step`` (numpy's error model): without a zero test before every division they are ~30 % faster.

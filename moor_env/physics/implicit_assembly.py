@@ -210,9 +210,8 @@ def _add_chord_spring(s, h, tension, q0x, q0y, q0z, rx, ry, rz, node_pos, a, b, 
 @jit_step
 def _add_axial_block(node_mm, ea, eb, alpha, beta, qx, qy, qz, seg_gain, s):
     """Add segment s's block alpha q q^T + beta I (its damping and stiffness along and across the axis q) to the
-    blocks of both end nodes (a negative index: the end is not a free node) and keep it in ``seg_gain[s]`` for the
-    elimination and the back substitution of this solve (``implicit.eliminate``), which would otherwise compute it
-    again from the segment's axis and material twice."""
+    blocks of both end nodes (a negative index: the end is not a free node) and keep it in ``seg_gain[s]``, which
+    the elimination and the back substitution of this solve read (``implicit.eliminate``)."""
     seg_gain[s, 0] = alpha
     seg_gain[s, 1] = beta
     seg_gain[s, 2] = qx

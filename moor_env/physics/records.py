@@ -82,7 +82,7 @@ WORK_FIELDS: tuple[Field, ...] = (
     Field("seg_tension", F8, 1, ("segs",)),  # [N]
     Field("seg_chord", F8, 2, ("segs", 4)),  # implicit step: predicted end chord [m] of a re-linearised segment, flag
     Field("seg_gain", F8, 2, ("segs", 5)),  # implicit step: each segment's block G_s of the solve (alpha, beta, q)
-    Field("node_base", F8, 2, ("nodes", 9)),  # implicit step: blocks and right-hand sides without the springs
+    Field("node_base", F8, 2, ("nodes", 9)),  # implicit step: blocks, right-hand sides less springs, contact
     Field("body_load", F8, 1, (6,)),  # force and moment on the anchor
     Field("body_acc", F8, 1, (6,)),  # its linear and angular acceleration
     Field("pos0", F8, 2, ("nodes", 3)),  # step-start positions (RK2); implicit step's tree (int64 view)

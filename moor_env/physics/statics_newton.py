@@ -254,7 +254,7 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
         node_pos[:, :] = saved
         body_state[:] = saved_body
         cuts += 1
-        if cuts > LINE_SEARCH_CUTS or it == max_iter - 1:  # the solve at a cut tau, or the next call, reads the loads
+        if cuts > LINE_SEARCH_CUTS or it == max_iter - 1:  # the solve at a cut tau, or the caller, reads the loads
             norm2, worst = residual(model, state, body_node, basis, res_body)
         else:  # norm2 and worst are still the state's; a shorter try of the step evaluates its own loads
             basis[:, :] = saved_basis
