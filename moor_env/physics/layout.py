@@ -123,7 +123,9 @@ CF_SPEED = 4  # characteristic contact speed the stiffness was chosen for [m/s]
 CF_MU = 5  # Coulomb friction coefficient [-]
 CF_STICK_SPEED = 6  # sliding speed below which friction is viscous (regularised stick) [m/s]
 CF_SEGMENTS = 7  # 1 where the contact also acts on segments cutting deeper than their nodes (segment_contact.py)
-N_CONTACT_F = 8
+CF_TURNING = 8  # 1 while the static solver's system takes the turning of the segment contacts' normals
+# (statics_contact.py, switched on by statics_stages.Stage for a stage that creeps); 0 as compiled
+N_CONTACT_F = 9
 
 # contact_out slots (what the contact did, physics/contact.py: add_contact_loads)
 CO_FORCE = 0  # magnitude of the net contact force on the anchor at the last load evaluation [N]

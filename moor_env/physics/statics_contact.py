@@ -15,6 +15,18 @@ slow its last iterations, never move its answer. Why not f_n H: far from the sol
 inside the convex shaft, it makes the node's block indefinite; on the low-spacing scenes of the statics benchmark
 it leaves more of them unsolved than it solves.
 
+Except for a segment contact in a stage that creeps (``CF_TURNING`` set, by ``statics_stages.Stage`` after
+``TURNING_AFTER`` iterations): there the system takes the turning of its normal round the anchor's axis,
+-k e (n . u) / rho t t^T on the motion of p* relative to the anchor (u the radial unit vector at p*, rho its
+distance from the axis, t = e x u). Why: a chain over a rim is free to slide round the axis, where k n n^T has no
+stiffness and the turning (a softening: the force turns with the normal) is the contact's whole stiffness. Without
+it the system is too stiff in that direction, each step removes a small share of the residual there, the
+monotonicity test refuses it, and the solve creeps (on the statics benchmark, stages of 400-1900 iterations at
+residuals of a few 1e-4 node weights). Why only after a while: switched on from a stage's first iteration, it left five
+of the benchmark's 1000 scenes unsolved that converge or are refused without it; after 100 iterations no
+outcome changes, and of the stages that crept for 444-1891 iterations (five scenes), all but one take 2-627
+(that one 464).
+
 A node couples to the anchor outside its attachment, which closes a loop in the tree of lines. The block
 elimination carries it exactly: every eliminated node passes its coupling to the anchor on to its parent (a 3x5
 block each way, nodes on the path from a contact to the anchor only) and its share to the anchor's 5x5 block,
@@ -48,7 +60,7 @@ import math
 
 from moor_env.physics import layout as L
 from moor_env.physics._jit import jit_no_refcount
-from moor_env.physics.anchor_surface import FEATURE_SHAFT, bounding_radius_m, from_cog, surface_distance
+from moor_env.physics.anchor_surface import FEATURE_SHAFT, bounding_radius_m, from_cog, radial_part, surface_distance
 from moor_env.physics.contact import may_touch
 from moor_env.physics.segment_contact import free_shares, may_cut, segment_geometry
 
@@ -64,20 +76,24 @@ G_JN = 4
 G_SHARE = 9
 G_SCALE = 10  # a segment contact's stiffness factor |g|^2 (physics/segment_contact.py: 1 off a rim's kink)
 G_DT = 11  # and how its deepest point moves along it, dt/dx_a (3), dt/dx_b (3) [1/m]
-N_GEO = 17
+G_TURN = 17  # a segment contact's direction round the anchor's axis at its deepest point, t = e x u (3)
+G_JT = 20  # J^T t (5)
+G_CURVATURE = 25  # how fast the normal turns towards t per metre moved along it, (n . u) / rho [1/m]
+N_GEO = 26
 
 
 @jit_no_refcount
-def _jn(basis, rx, ry, rz, nx, ny, nz, geo, n):
-    """J^T n of a material point at r from the COG: the normal's translation part, then basis[k] . (r x n)."""
-    geo[n, G_JN] = nx
-    geo[n, G_JN + 1] = ny
-    geo[n, G_JN + 2] = nz
+def _jn(basis, rx, ry, rz, nx, ny, nz, geo, n, column=G_JN):
+    """J^T n of a material point at r from the COG into ``geo[n, column:column + 5]``: the vector's translation
+    part, then basis[k] . (r x n)."""
+    geo[n, column] = nx
+    geo[n, column + 1] = ny
+    geo[n, column + 2] = nz
     cx = ry * nz - rz * ny
     cy = rz * nx - rx * nz
     cz = rx * ny - ry * nx
     for k in range(2):
-        geo[n, G_JN + 3 + k] = basis[k, 0] * cx + basis[k, 1] * cy + basis[k, 2] * cz
+        geo[n, column + 3 + k] = basis[k, 0] * cx + basis[k, 1] * cy + basis[k, 2] * cz
 
 
 @jit_no_refcount
@@ -156,10 +172,37 @@ def _segment_geometry(basis, model, state, geo, cand, cin):
         geo[r, G_SCALE] = scale
         for i, u in enumerate((uax, uay, uaz, ubx, uby, ubz)):
             geo[r, G_DT + i] = u
+        _turning(basis, body_state, px, py, pz, rx, ry, rz, nx, ny, nz, geo, r)
         cand[r] = 1
         cin[r] = 1 if e > 0.0 else 0
         count += 1
     return count
+
+
+@jit_no_refcount
+def _turning(basis, body_state, px, py, pz, rx, ry, rz, nx, ny, nz, geo, r):
+    """Row r's turning of the normal round the anchor's axis: t = e x u at the point p (u its radial unit vector),
+    J^T t, and (n . u) / rho, the rate at which n turns towards t per metre p moves along t relative to the
+    anchor (zero on the axis)."""
+    _, qx, qy, qz = radial_part(px, py, pz, body_state)
+    rho = math.sqrt(qx * qx + qy * qy + qz * qz)
+    geo[r, G_CURVATURE] = 0.0
+    if rho <= 0.0:
+        return
+    ux = qx / rho
+    uy = qy / rho
+    uz = qz / rho
+    ex = body_state[L.BS_AXIS]
+    ey = body_state[L.BS_AXIS + 1]
+    ez = body_state[L.BS_AXIS + 2]
+    tx = ey * uz - ez * uy
+    ty = ez * ux - ex * uz
+    tz = ex * uy - ey * ux
+    geo[r, G_TURN] = tx
+    geo[r, G_TURN + 1] = ty
+    geo[r, G_TURN + 2] = tz
+    _jn(basis, rx, ry, rz, tx, ty, tz, geo, r, G_JT)
+    geo[r, G_CURVATURE] = (nx * ux + ny * uy + nz * uz) / rho
 
 
 @jit_no_refcount
@@ -209,13 +252,14 @@ def add_contact_blocks(model, state, geo, cand, cin, dmat, coupling, bmat, cmat,
             for j in range(5):
                 body_a[i, j] += k * geo[n, G_JN + i] * geo[n, G_JN + j]
         coupled[n] = 1
+    turning = model.contact_f[L.CF_TURNING] != 0.0
     for r in range(nodes, geo.shape[0]):
         if cand[r] != 0:
-            _add_segment_blocks(k, state, geo, cin, r, dmat, coupling, bmat, cmat, coupled, body_a, body_r)
+            _add_segment_blocks(k, turning, state, geo, cin, r, dmat, coupling, bmat, cmat, coupled, body_a, body_r)
 
 
 @jit_no_refcount
-def _add_segment_blocks(k, state, geo, cin, r, dmat, coupling, bmat, cmat, coupled, body_a, body_r):
+def _add_segment_blocks(k, turning, state, geo, cin, r, dmat, coupling, bmat, cmat, coupled, body_a, body_r):
     """Segment contact row r's terms (``physics/segment_contact.py``: k g g^T, g = ((1 - t) n, t n, -J^T n)):
     its free nodes' blocks, their coupling in the segment's block, their couplings to the anchor, the anchor's
     block, and where it is outside now, the gap to close (the linear law k e n, e < 0); where it lets go during
@@ -230,10 +274,20 @@ def _add_segment_blocks(k, state, geo, cin, r, dmat, coupling, bmat, cmat, coupl
     if excess <= 0.0:  # the gap to close before it cuts in
         _add_segment_force(k * excess, geo, r, state.node_acc, a, wa, b, wb, body_r)
     _add_share_transfer(k * excess, geo, r, s, a, wa, b, wb, dmat, coupling)
-    k = k * geo[r, G_SCALE]
+    _add_pair(k * geo[r, G_SCALE], geo, r, G_NORMAL, G_JN, s, a, wa, b, wb, dmat, coupling, bmat, cmat, coupled,
+              body_a)
+    if turning and excess > 0.0 and geo[r, G_CURVATURE] != 0.0:
+        _add_pair(-k * excess * geo[r, G_CURVATURE], geo, r, G_TURN, G_JT, s, a, wa, b, wb, dmat, coupling, bmat,
+                  cmat, coupled, body_a)
+
+
+@jit_no_refcount
+def _add_pair(k, geo, r, vector, jv, s, a, wa, b, wb, dmat, coupling, bmat, cmat, coupled, body_a):
+    """k G G^T of segment contact row r, G = ((1 - t) v, t v, -J^T v) over its free nodes and the anchor, v the
+    unit vector in ``geo[r, vector:vector + 3]`` and J^T v in ``geo[r, jv:jv + 5]``."""
     for i in range(3):
         for j in range(3):
-            nn = k * geo[r, G_NORMAL + i] * geo[r, G_NORMAL + j]
+            nn = k * geo[r, vector + i] * geo[r, vector + j]
             if wa > 0.0:
                 dmat[a, i, j] += wa * wa * nn
             if wb > 0.0:
@@ -246,12 +300,12 @@ def _add_segment_blocks(k, state, geo, cin, r, dmat, coupling, bmat, cmat, coupl
             continue
         for i in range(3):
             for j in range(5):
-                bmat[n, i, j] -= w * k * geo[r, G_NORMAL + i] * geo[r, G_JN + j]
-                cmat[n, j, i] -= w * k * geo[r, G_JN + j] * geo[r, G_NORMAL + i]
+                bmat[n, i, j] -= w * k * geo[r, vector + i] * geo[r, jv + j]
+                cmat[n, j, i] -= w * k * geo[r, jv + j] * geo[r, vector + i]
         coupled[n] = 1
     for i in range(5):
         for j in range(5):
-            body_a[i, j] += k * geo[r, G_JN + i] * geo[r, G_JN + j]
+            body_a[i, j] += k * geo[r, jv + i] * geo[r, jv + j]
 
 
 @jit_no_refcount

@@ -42,6 +42,8 @@ SMALLEST_CURRENT_STEP = 1.0 / 256.0  # of the scene's current scale
 CONTACT_RAMP = (1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 0.3)  # shares of the contact stiffness before its own
 SEGMENTS_FROM_SHARE = 1e-1  # the share from which the ramp has the segments' contact on
 PROGRESS_AFTER_S = 1.0
+TURNING_AFTER = 100  # iterations of a stage after which its system takes the turning of segment contacts' normals
+# (a multiple of CHUNK_ITERATIONS: it is switched between chunks)
 # strain scales of the tension-only law's rounded kink, before its own, on which a mapped start is solved first
 SLACK_SMOOTHING_RAMP = (1e-4, 1e-6)
 SMOOTHED_STAGE_ITERATIONS = 100  # iterations at most at each of them
@@ -84,8 +86,14 @@ class Stage:
         self.t0 = time.perf_counter()
         self.bar = None
 
-    def run(self, scale: float, tol_rel: float, step_tol_m: float, budget: int) -> bool:
-        """Solve at current scale ``scale`` within ``budget`` iterations; True once converged."""
+    def run(self, scale: float, tol_rel: float, step_tol_m: float, budget: int, turning: bool = False) -> bool:
+        """Solve at current scale ``scale`` within ``budget`` iterations; True once converged. With ``turning``,
+        after ``TURNING_AFTER`` iterations and while the residual is below ``STAGE_TOLERANCE`` (the stage creeps
+        near its solution), the system takes the turning of the segment contacts' normals
+        (``physics/statics_contact.py``, ``CF_TURNING``). Why only where the caller asks (a solve's last stage,
+        not the current's increments or long stage): in the long stage of the current on a coarse start of the
+        envs' resolution, the turning left a scene unsolved that converges without it (and is then refused for
+        its fibre on the seabed)."""
         sim, ctl = self.sim, self.ctl
         sim.env_f[L.EF_CUR_SCALE] = scale
         ctl[C_TOL] = tol_rel
@@ -93,16 +101,24 @@ class Stage:
         ctl[C_STATUS] = STATUS_RUNNING
         ctl[C_CAP] = 0.0
         ctl[C_CUTS] = 0.0
-        end = min(self.max_iter, int(ctl[C_ITERATIONS]) + budget)
+        start = int(ctl[C_ITERATIONS])
+        end = min(self.max_iter, start + budget)
         model, state = sim.records()
         body = body_root(sim)
-        while ctl[C_ITERATIONS] < end and ctl[C_STATUS] == STATUS_RUNNING:
-            try:
-                newton_statics(ctl, min(CHUNK_ITERATIONS, end - int(ctl[C_ITERATIONS])), body, model, state,
-                               self.seg_age)
-            except np.linalg.LinAlgError as exc:  # the anchor's 5x5 system singular or not finite
-                raise StaticsNotConverged(f"static Newton step failed: {exc}") from exc
-            self._show()
+        contact_f = sim.model.contact_f
+        try:
+            while ctl[C_ITERATIONS] < end and ctl[C_STATUS] == STATUS_RUNNING:
+                creeping = (turning and ctl[C_ITERATIONS] >= start + TURNING_AFTER
+                            and ctl[C_RESIDUAL] < STAGE_TOLERANCE)
+                contact_f[L.CF_TURNING] = 1.0 if creeping else 0.0
+                try:
+                    newton_statics(ctl, min(CHUNK_ITERATIONS, end - int(ctl[C_ITERATIONS])), body, model, state,
+                                   self.seg_age)
+                except np.linalg.LinAlgError as exc:  # the anchor's 5x5 system singular or not finite
+                    raise StaticsNotConverged(f"static Newton step failed: {exc}") from exc
+                self._show()
+        finally:
+            contact_f[L.CF_TURNING] = 0.0
         return ctl[C_STATUS] == STATUS_CONVERGED
 
     def _show(self) -> None:
