@@ -15,17 +15,18 @@ slow its last iterations, never move its answer. Why not f_n H: far from the sol
 inside the convex shaft, it makes the node's block indefinite; on the low-spacing scenes of the statics benchmark
 it leaves more of them unsolved than it solves.
 
-Except for a segment contact in a stage that creeps (``CF_TURNING`` set, by ``statics_stages.Stage`` after
-``TURNING_AFTER`` iterations): there the system takes the turning of its normal round the anchor's axis,
--k e (n . u) / rho t t^T on the motion of p* relative to the anchor (u the radial unit vector at p*, rho its
-distance from the axis, t = e x u). Why: a chain over a rim is free to slide round the axis, where k n n^T has no
-stiffness and the turning (a softening: the force turns with the normal) is the contact's whole stiffness. Without
-it the system is too stiff in that direction, each step removes a small share of the residual there, the
-monotonicity test refuses it, and the solve creeps (on the statics benchmark, stages of 400-1900 iterations at
-residuals of a few 1e-4 node weights). Why only after a while: switched on from a stage's first iteration, it left five
-of the benchmark's 1000 scenes unsolved that converge or are refused without it; after 100 iterations no
-outcome changes, and of the stages that crept for 444-1891 iterations (five scenes), all but one take 2-627
-(that one 464).
+Except for a segment contact in a stage that creeps (``CF_TURNING`` set by ``statics_stages.Stage``): there the
+system takes the turning of its normal round the anchor's axis, -k e (n . u) / rho t t^T on the motion of p*
+relative to the anchor (u the radial unit vector at p*, rho its distance from the axis, t = e x u). Why: a chain
+over a rim is free to slide round the axis, where k n n^T has no stiffness and the turning (a softening: the force
+turns with the normal) is the contact's whole stiffness. Without it the system is too stiff in that direction, each
+step removes a small share of the residual there, the monotonicity test refuses it, and the solve creeps (on the
+statics benchmark, stages of 400-1900 iterations at residuals of a few 1e-4 node weights). Why only after a while:
+switched on from the first iteration of a solve's last stage, it left four of the benchmark's 1000 scenes unsolved
+that converge or are refused without it, after 50 iterations one, after 100 none. Why a solve's last stage only,
+below the stage tolerance: see ``statics_stages.Stage.run``. On the statics benchmark, of the seven stages that
+crept for 444-1891 iterations (five scenes), four are gone or take at most 134, one takes 703 instead of 1407, and
+two creep as before (1553 and 444 iterations).
 
 A node couples to the anchor outside its attachment, which closes a loop in the tree of lines. The block
 elimination carries it exactly: every eliminated node passes its coupling to the anchor on to its parent (a 3x5
