@@ -44,6 +44,7 @@ SEGMENTS_FROM_SHARE = 1e-1  # the share from which the ramp has the segments' co
 PROGRESS_AFTER_S = 1.0
 TURNING_AFTER = 100  # iterations of a stage after which its system takes the turning of segment contacts' normals
 # (a multiple of CHUNK_ITERATIONS: it is switched between chunks)
+TURNING_BELOW = 1.0  # and while the residual is below this (of a node's weight: near the stage's solution)
 # strain scales of the tension-only law's rounded kink, before its own, on which a mapped start is solved first
 SLACK_SMOOTHING_RAMP = (1e-4, 1e-6)
 SMOOTHED_STAGE_ITERATIONS = 100  # iterations at most at each of them
@@ -88,12 +89,14 @@ class Stage:
 
     def run(self, scale: float, tol_rel: float, step_tol_m: float, budget: int, turning: bool = False) -> bool:
         """Solve at current scale ``scale`` within ``budget`` iterations; True once converged. With ``turning``,
-        after ``TURNING_AFTER`` iterations and while the residual is below ``STAGE_TOLERANCE`` (the stage creeps
+        after ``TURNING_AFTER`` iterations and while the residual is below ``TURNING_BELOW`` (the stage creeps
         near its solution), the system takes the turning of the segment contacts' normals
         (``physics/statics_contact.py``, ``CF_TURNING``). Why only where the caller asks (a solve's last stage,
         not the current's increments or long stage): in the long stage of the current on a coarse start of the
         envs' resolution, the turning left a scene unsolved that converges without it (and is then refused for
-        its fibre on the seabed)."""
+        its fibre on the seabed). Why below a node's weight and not the stage tolerance (1e-2): on the statics
+        benchmark the two scenes whose last stages still crept then take 13 % and 32 % fewer iterations, with no
+        outcome changed there or on the envs' resolution."""
         sim, ctl = self.sim, self.ctl
         sim.env_f[L.EF_CUR_SCALE] = scale
         ctl[C_TOL] = tol_rel
@@ -109,7 +112,7 @@ class Stage:
         try:
             while ctl[C_ITERATIONS] < end and ctl[C_STATUS] == STATUS_RUNNING:
                 creeping = (turning and ctl[C_ITERATIONS] >= start + TURNING_AFTER
-                            and ctl[C_RESIDUAL] < STAGE_TOLERANCE)
+                            and ctl[C_RESIDUAL] < TURNING_BELOW)
                 contact_f[L.CF_TURNING] = 1.0 if creeping else 0.0
                 try:
                     newton_statics(ctl, min(CHUNK_ITERATIONS, end - int(ctl[C_ITERATIONS])), body, model, state,
