@@ -270,7 +270,7 @@ def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, a
             soften_slack(stage, calm)
         final = calm == current
         done = stage.run(calm, tol_rel if final else STAGE_TOLERANCE, STEP_TOLERANCE_M if final else STAGE_STEP_M,
-                         max_iter, turning=True)
+                         max_iter, turning=final)
         if done and not final:
             apply_current(stage, current, tol_rel, max_iter)
     except StaticsNotConverged as exc:  # the anchor's 5x5 system singular

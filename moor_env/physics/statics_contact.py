@@ -17,16 +17,17 @@ it leaves more of them unsolved than it solves.
 
 Except for a segment contact in a stage that creeps (``CF_TURNING`` set by ``statics_stages.Stage``): there the
 system takes the turning of its normal round the anchor's axis, -k e (n . u) / rho t t^T on the motion of p*
-relative to the anchor (u the radial unit vector at p*, rho its distance from the axis, t = e x u). Why: a chain
-over a rim is free to slide round the axis, where k n n^T has no stiffness and the turning (a softening: the force
-turns with the normal) is the contact's whole stiffness. Without it the system is too stiff in that direction, each
-step removes a small share of the residual there, the monotonicity test refuses it, and the solve creeps (on the
-statics benchmark, stages of 400-1900 iterations at residuals of a few 1e-4 node weights). Why only after a while:
-with the residual gate at 1e-2, switched on from the first iteration of a solve's last stage it left four of the
-benchmark's 1000 scenes unsolved that converge or are refused without it, after 50 iterations one, after 100 none.
-Why a solve's last stage only, near its solution: see ``statics_stages.Stage.run``. On the statics benchmark, of
-the seven stages that crept for 444-1891 iterations (five scenes), three are gone, three take 134-627 instead of
-921-1485, and one is unchanged (444 iterations at residuals of a hundred node weights, far from its solution).
+relative to the anchor (u the radial unit vector at p*, rho its distance from the axis, t = e x u less its part
+along the segment: ``_turning``). Why: a chain over a rim is free to slide round the axis, where k n n^T has no
+stiffness and the turning (a softening: the force turns with the normal) is the contact's whole stiffness. Without
+it the system is too stiff in that direction, each step removes a small share of the residual there, the
+monotonicity test refuses it, and the solve creeps (on the statics benchmark, stages of 400-1900 iterations at
+residuals of a few 1e-4 node weights). Why only after a while: with the residual gate at 1e-2, switched on from the
+first iteration of a solve's last stage it left four of the benchmark's 1000 scenes unsolved that converge or are
+refused without it, after 50 iterations one, after 100 none. Why a solve's last stage only, near its solution: see
+``statics_stages.Stage.run``. On the statics benchmark, of the seven stages that creep for 444-1891 iterations
+without it (five scenes), three stop creeping with it, three take 134-575 iterations (921-1485 without), and one
+takes 444 either way (at residuals of a hundred node weights, far from its solution).
 
 A node couples to the anchor outside its attachment, which closes a loop in the tree of lines. The block
 elimination carries it exactly: every eliminated node passes its coupling to the anchor on to its parent (a 3x5
@@ -77,7 +78,7 @@ G_JN = 4
 G_SHARE = 9
 G_SCALE = 10  # a segment contact's stiffness factor |g|^2 (physics/segment_contact.py: 1 off a rim's kink)
 G_DT = 11  # and how its deepest point moves along it, dt/dx_a (3), dt/dx_b (3) [1/m]
-G_TURN = 17  # a segment contact's direction round the anchor's axis at its deepest point, t = e x u (3)
+G_TURN = 17  # a segment contact's direction round the anchor's axis at its deepest point, across the segment (3)
 G_JT = 20  # J^T t (5)
 G_CURVATURE = 25  # how fast the normal turns towards t per metre moved along it, (n . u) / rho [1/m]
 N_GEO = 26
@@ -173,7 +174,8 @@ def _segment_geometry(basis, model, state, geo, cand, cin):
         geo[r, G_SCALE] = scale
         for i, u in enumerate((uax, uay, uaz, ubx, uby, ubz)):
             geo[r, G_DT + i] = u
-        _turning(basis, body_state, px, py, pz, rx, ry, rz, nx, ny, nz, geo, r)
+        _turning(basis, body_state, px, py, pz, rx, ry, rz, nx, ny, nz, node_pos[b, 0] - node_pos[a, 0],
+                 node_pos[b, 1] - node_pos[a, 1], node_pos[b, 2] - node_pos[a, 2], geo, r)
         cand[r] = 1
         cin[r] = 1 if e > 0.0 else 0
         count += 1
@@ -181,10 +183,13 @@ def _segment_geometry(basis, model, state, geo, cand, cin):
 
 
 @jit_no_refcount
-def _turning(basis, body_state, px, py, pz, rx, ry, rz, nx, ny, nz, geo, r):
-    """Row r's turning of the normal round the anchor's axis: t = e x u at the point p (u its radial unit vector),
-    J^T t, and (n . u) / rho, the rate at which n turns towards t per metre p moves along t relative to the
-    anchor (zero on the axis)."""
+def _turning(basis, body_state, px, py, pz, rx, ry, rz, nx, ny, nz, dx, dy, dz, geo, r):
+    """Segment contact row r's turning of the normal round the anchor's axis: t = e x u at its deepest point p (u
+    the radial unit vector there) less its part along the segment (d: node a to node b), t - (t . s) s, J^T of
+    that, and (n . u) / rho, the rate at which n turns towards t per metre p moves along t relative to the anchor
+    (zero on the axis). Why less the part along the segment: a segment moved along itself keeps its deepest point
+    where it is (a chord across the shaft, running round the axis), and its normal does not turn; a chain over a
+    rim runs across t, and keeps all of it."""
     _, qx, qy, qz = radial_part(px, py, pz, body_state)
     rho = math.sqrt(qx * qx + qy * qy + qz * qz)
     geo[r, G_CURVATURE] = 0.0
@@ -199,6 +204,12 @@ def _turning(basis, body_state, px, py, pz, rx, ry, rz, nx, ny, nz, geo, r):
     tx = ey * uz - ez * uy
     ty = ez * ux - ex * uz
     tz = ex * uy - ey * ux
+    length2 = dx * dx + dy * dy + dz * dz
+    if length2 > 0.0:
+        along = (tx * dx + ty * dy + tz * dz) / length2
+        tx -= along * dx
+        ty -= along * dy
+        tz -= along * dz
     geo[r, G_TURN] = tx
     geo[r, G_TURN + 1] = ty
     geo[r, G_TURN + 2] = tz
@@ -261,10 +272,11 @@ def add_contact_blocks(model, state, geo, cand, cin, dmat, coupling, bmat, cmat,
 
 @jit_no_refcount
 def _add_segment_blocks(k, turning, state, geo, cin, r, dmat, coupling, bmat, cmat, coupled, body_a, body_r):
-    """Segment contact row r's terms (``physics/segment_contact.py``: k g g^T, g = ((1 - t) n, t n, -J^T n)):
-    its free nodes' blocks, their coupling in the segment's block, their couplings to the anchor, the anchor's
-    block, and where it is outside now, the gap to close (the linear law k e n, e < 0); where it lets go during
-    the step, its present force leaves the right-hand sides instead."""
+    """Segment contact row r's terms (``physics/segment_contact.py``: k g g^T, g = ((1 - t) n, t n, -J^T n),
+    and with ``turning`` the turning of its normal round the anchor's axis, module docstring): its free nodes'
+    blocks, their coupling in the segment's block, their couplings to the anchor, the anchor's block, and where it
+    is outside now, the gap to close (the linear law k e n, e < 0); where it lets go during the step, its present
+    force leaves the right-hand sides instead."""
     s = r - state.node_pos.shape[0]
     a, b, wa, wb = _segment_nodes(state, geo, r)
     excess = geo[r, G_DEPTH]

@@ -99,8 +99,8 @@ def _contact_point(sim, segments: bool):
     return a + t * (b - a), st.node_pos.shape[0] + s
 
 
-@pytest.mark.parametrize("segments", [False, True])
-def test_newton_step_predicts_the_residual_change(segments):
+@pytest.mark.parametrize(("segments", "turning"), [(False, False), (True, False), (True, True)])
+def test_newton_step_predicts_the_residual_change(segments, turning):
     """The linear system of a step, with the contact's terms and their coupling to the anchor carried through the
     tree elimination, is the residual's derivative: from a state with the anchor pushed 2 mm into the resting
     loop (at a node resting on the shaft, or at the segment over the back end's rim), a step of eps = 1e-3 along
@@ -108,7 +108,8 @@ def test_newton_step_predicts_the_residual_change(segments):
     node's residual as predicted, F(x + eps dx) = (1 - eps) F(x), within 2 % of the change at a node (the turning
     of the normal and the moment arm's change, left out of the system, are below that) and 3 % at a segment (there
     also the turning of its direction g with the segment, k e dg/dx, and the shift of its shares as the anchor
-    moves, at e of 2 mm)."""
+    moves, at e of 2 mm); with the turning of the segment's normal round the axis in the system (``CF_TURNING``,
+    as a creeping stage takes it) within the same bound."""
     from moor_env.physics import statics_system as system
     from moor_env.physics.statics_contact import add_contact_blocks, contact_geometry, slide_plan
     from moor_env.physics.statics_newton import _apply
@@ -146,6 +147,7 @@ def test_newton_step_predicts_the_residual_change(segments):
     taut[:] = (length > sim.state.seg_f[:, L.SF_L0]) | (slack_counts(sim.state, False) < system.SLACK_PATIENCE)
     node_down[:] = sim.state.node_pos[:, 2] <= -sim.env_f[L.EF_DEPTH]
     assert contact_geometry(basis, model, state, geo, cand, cin) > 0 and cin[row] == 1
+    model.contact_f[L.CF_TURNING] = 1.0 if turning else 0.0
     system._assemble(1e-24, body, model, state, taut, node_down, dmat, coupling, orow, blocks[0])
     add_contact_blocks(model, state, geo, cand, cin, dmat, coupling, bmat, cmat, coupled, body_a, body_r)
     system.eliminate(1e-24, nq, body, basis, res_body, dq, model, state, dmat, coupling, tree, orow, True, bmat,
@@ -335,8 +337,8 @@ def test_a_creeping_stage_takes_the_turning_of_the_normal(monkeypatch):
     turning = solve_statics(scene, progress=False, method="newton")
     monkeypatch.setattr(statics_stages, "TURNING_AFTER", 10**9)
     creeping = solve_statics(scene, progress=False, method="newton")
-    assert turning.iterations < 400 < 1000 < creeping.iterations
-    assert _residual_ratio(turning) < 1e-4
+    assert turning.iterations < 400 < 1000 < creeping.iterations and 3 * turning.iterations < creeping.iterations
+    assert _residual_ratio(turning) < 1e-4 and _residual_ratio(creeping) < 1e-4
     assert np.linalg.norm(np.subtract(turning.release_point_m, creeping.release_point_m)) < 1e-3
     body_a, body_b = (s.simulator.state.body_state[L.BS_POS:L.BS_POS + 3] for s in (turning, creeping))
     assert np.linalg.norm(body_a - body_b) < 5e-3
