@@ -148,6 +148,7 @@ def _segment_geometry(basis, model, state, geo, cand, cin):
         return 0
     seabed = -model.env_f[L.EF_DEPTH]
     radius = bounding_radius_m(model.contact_shape)
+    turning = model.contact_f[L.CF_TURNING] != 0.0  # the turning's columns are read only then
     count = 0
     for s in range(seg_i.shape[0]):
         r = first + s
@@ -174,8 +175,9 @@ def _segment_geometry(basis, model, state, geo, cand, cin):
         geo[r, G_SCALE] = scale
         for i, u in enumerate((uax, uay, uaz, ubx, uby, ubz)):
             geo[r, G_DT + i] = u
-        _turning(basis, body_state, px, py, pz, rx, ry, rz, nx, ny, nz, node_pos[b, 0] - node_pos[a, 0],
-                 node_pos[b, 1] - node_pos[a, 1], node_pos[b, 2] - node_pos[a, 2], geo, r)
+        if turning:
+            _turning(basis, body_state, px, py, pz, rx, ry, rz, nx, ny, nz, node_pos[b, 0] - node_pos[a, 0],
+                     node_pos[b, 1] - node_pos[a, 1], node_pos[b, 2] - node_pos[a, 2], geo, r)
         cand[r] = 1
         cin[r] = 1 if e > 0.0 else 0
         count += 1
