@@ -79,7 +79,7 @@ G_SHARE = 9
 G_SCALE = 10  # a segment contact's stiffness factor |g|^2 (physics/segment_contact.py: 1 off a rim's kink)
 G_DT = 11  # and how its deepest point moves along it, dt/dx_a (3), dt/dx_b (3) [1/m]
 G_TURN = 17  # a segment contact's direction round the anchor's axis at its deepest point, across the segment (3)
-G_JT = 20  # J^T t (5)
+G_JT = 20  # J^T of it (5)
 G_CURVATURE = 25  # how fast the normal turns towards t per metre moved along it, (n . u) / rho [1/m]
 N_GEO = 26
 
@@ -299,7 +299,8 @@ def _add_segment_blocks(k, turning, state, geo, cin, r, dmat, coupling, bmat, cm
 @jit_no_refcount
 def _add_pair(k, geo, r, vector, jv, s, a, wa, b, wb, dmat, coupling, bmat, cmat, coupled, body_a):
     """k G G^T of segment contact row r, G = ((1 - t) v, t v, -J^T v) over its free nodes and the anchor, v the
-    unit vector in ``geo[r, vector:vector + 3]`` and J^T v in ``geo[r, jv:jv + 5]``."""
+    vector in ``geo[r, vector:vector + 3]`` (the unit normal, or the turning's direction) and J^T v in
+    ``geo[r, jv:jv + 5]``."""
     for i in range(3):
         for j in range(3):
             nn = k * geo[r, vector + i] * geo[r, vector + j]
