@@ -180,6 +180,15 @@ def _coarse_start(sim):
     return CoarseStart(sim, functools.partial(_coarse_solve, progress=False))
 
 
+# The statics benchmark's scene 740 (seed 0), as drawn: default lines, the vessels 255 m apart in 964 m of water, strong
+# current. Which start converges on such a scene depends on the last digits of the solve and on the solver's stages.
+COARSE_START_SCENE = {"water_depth_m": 963.8065563356558, "vessel_spacing_m": 254.65972886540072,
+                      "mooring_line_length_m": 1192.868452759057, "vertical_chain_length_m": 14.145984018490493,
+                      "drop_height_m": 76.63542612061332, "current_scale": 1.274645715641486,
+                      "current_direction_deg": 19.315023282564194, "anchor_mass_scale": 1.0028828163037151,
+                      "fidelity": "default"}
+
+
 def test_coarse_start_solves_the_fine_lines():
     """Reference: the solver's tolerance on the discrete model's residual (1e-4 of each node's weight; the anchor's
     net force within 1e-4 of its weight in air, a looser test). From the equilibrium of the scene compiled at the
@@ -188,11 +197,11 @@ def test_coarse_start_solves_the_fine_lines():
     coarse ones get no coarse start."""
     from moor_env import Simulator, compile_scene
 
-    scene = load_scene("gjoa-500", LOOP_ON_ANCHOR_IN_CURRENT)
+    scene = load_scene("gjoa-500", COARSE_START_SCENE)
     sim = Simulator(compile_scene(scene))
     assert _coarse_start(sim).start(progress=False) is not None
     assert _largest_residual_ratio(sim) < 1e-4
-    coarse = solve_statics(load_scene("gjoa-500", {**LOOP_ON_ANCHOR_IN_CURRENT, "fidelity": "fast",
+    coarse = solve_statics(load_scene("gjoa-500", {**COARSE_START_SCENE, "fidelity": "fast",
                                                    "discretization.fit_to_geometry": False}),
                            progress=False, method="newton")
     release = sim.state.node_pos[sim.model.release_node]
