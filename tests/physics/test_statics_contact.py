@@ -325,12 +325,13 @@ OVER_THE_RIM = {"water_depth_m": 418.343, "vessel_spacing_m": 8.185, "mooring_li
 
 
 def test_a_creeping_stage_takes_the_turning_of_the_normal(monkeypatch):
-    """A stage that has not converged after ``TURNING_AFTER`` iterations takes the turning of the segment contacts'
-    normals round the anchor's axis: the loop over the back end's rim (``OVER_THE_RIM``) then converges in a few
-    hundred iterations in all, where without it the solve creeps for over a thousand; both end within the solver's
-    tolerance (1e-4 of a node's weight) at nearly the same state: release point within 1 mm, anchor within 5 mm
-    (the creeping solve stops where its residual is within tolerance, short of the rest state in the direction
-    round the axis, which the residual barely resists); the switch is off again after every stage."""
+    """A solve's last stage that still runs after ``TURNING_AFTER`` iterations, its residual below ``TURNING_BELOW``,
+    takes the turning of the segment contacts' normals round the anchor's axis: the loop over the back end's rim
+    (``OVER_THE_RIM``) then converges in a few hundred iterations in all, where without it the solve creeps for over
+    a thousand; both end within the solver's tolerance (1e-4 of a node's weight) at nearly the same state: release
+    point within 1 mm, anchor within 5 mm (the creeping solve stops where its residual is within tolerance, short of
+    the rest state in the direction round the axis, which the residual barely resists); the switch is off again after
+    every stage."""
     from moor_env.physics import statics_stages
 
     scene = load_scene("gjoa-500", OVER_THE_RIM)
