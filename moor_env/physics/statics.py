@@ -33,6 +33,7 @@ that where it does not converge so.
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import dataclasses
 
 import numpy as np
@@ -47,6 +48,7 @@ from moor_env.physics.statics_newton import (
     C_ITERATIONS,
     C_MAX_STEP,
     C_RESIDUAL,
+    C_SEABED_RELEASE,
     C_STATUS,
     C_TAU,
     N_CTL,
@@ -69,12 +71,25 @@ from moor_env.physics.statics_stages import (
     stiffen_contact,
 )
 
-__all__ = ["SMOOTHING_FINAL", "n_static_dofs", "solve_equilibrium", "solve_newton"]
+__all__ = ["SMOOTHING_FINAL", "n_static_dofs", "seabed_set_grows", "solve_equilibrium", "solve_newton"]
 
 MAX_ITERATIONS = 2000
 RAMP_DEPTH_M = 0.01  # a start with a line deeper than this inside the anchor takes the ramp (at rest: < 1 mm)
 SOFTENED_START_ITERATIONS = 400  # a mapped start's iterations at most with the slack law softened first (per solve)
 METHODS = ("auto", "newton", "relaxation")
+_SEABED_RELEASE = contextvars.ContextVar("seabed_release", default=True)
+
+
+@contextlib.contextmanager
+def seabed_set_grows():
+    """Within the block, every Newton step's seabed set only grows after its first solve
+    (``physics/statics_newton.py``, ``C_SEABED_RELEASE``): the rule for a scene that the releases leave unsolved
+    (``moor_env.simulation.solve_statics``)."""
+    token = _SEABED_RELEASE.set(False)
+    try:
+        yield
+    finally:
+        _SEABED_RELEASE.reset(token)
 
 
 def n_static_dofs(sim) -> int:
@@ -256,6 +271,7 @@ def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, a
     ctl = np.zeros(N_CTL)
     ctl[C_TAU] = 1e3 if warm else TAU_START_S
     ctl[C_MAX_STEP] = max_step_m
+    ctl[C_SEABED_RELEASE] = 1.0 if _SEABED_RELEASE.get() else 0.0
     current = float(sim.env_f[L.EF_CUR_SCALE])
     stage = Stage(sim, ctl, max_iter, progress, not warm or mapped)
     sim.env_f[L.EF_SLACK_SMOOTHING] = SMOOTHING_FINAL

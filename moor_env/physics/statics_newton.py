@@ -25,6 +25,15 @@ stiff segment, harmlessly, and on the statics benchmark's slowest scenes a bound
 a bound of 1e5 let the slowest solves wander (the residual swinging between 1e-2 and 1e5 node weights over
 hundreds of iterations, a third of the steps taken back) and left one unconverged.
 Converged when the residual is within tolerance and the step at the state is below the step tolerance.
+
+The step's seabed set (``statics_system.solve_step``): a node that one of the step's solves put on the seabed
+leaves the set again where a later solve lifts it (once per step), unless ``C_SEABED_RELEASE`` is 0, where the set
+only grows after the step's first solve. Why: with the set only growing, whether a node near a touchdown is held
+turns on an intermediate solve, so that the step jumps between nearby states; in strong current, as a mooring
+line's touchdown swings over the seabed, the step test then takes back almost every step, however short (in the
+slowest such scenes of the statics benchmark, half to nine tenths of the steps taken back, nearly all of those
+shorter than a twentieth of their step, had a set other than the state's step). With the releases the set is the
+same at nearby states.
 """
 
 from __future__ import annotations
@@ -66,7 +75,8 @@ C_CAP = 9  # longest move allowed for the next step [m] (0: the step limit)
 C_CUTS = 10  # cuts of the present step so far
 C_STEP_TOL = 11  # converged once the residual is within tolerance and the step below this [m]
 C_TAU_MAX = 12  # longest pseudo time step [s] (0: TAU_MAX_S)
-N_CTL = 13
+C_SEABED_RELEASE = 13  # 1: a step's seabed set may lose nodes in every solve; 0: in its first only (module docstring)
+N_CTL = 14
 
 STATUS_RUNNING = 0
 STATUS_CONVERGED = 1
@@ -138,7 +148,7 @@ def _bounded_step(tau, ctl, nq, body_node, basis, res_body, dq, model, state, sc
     size = math.inf
     for _ in range(8):
         ctl[C_SOLVES] += solve_step(1.0 / (tau * tau), nq, body_node, basis, res_body, dq, model, state, scratch,
-                                    tree, orow, seg_age)
+                                    tree, orow, seg_age, ctl[C_SEABED_RELEASE] != 0.0)
         size = step_size(body_node, model, state, dq)
         if size <= OVERSIZE * ctl[C_MAX_STEP]:
             break

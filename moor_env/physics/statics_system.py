@@ -18,7 +18,10 @@ couplings (``physics/statics_contact.py``).
 The seabed contact is one-sided: K carries its stiffness for the nodes that are on the seabed at the end of the
 step, and G the gap a node must close before the seabed holds it (or the support it loses when it lifts off). The
 step is solved again while that prediction changes (``ACTIVE_SET_ROUNDS``): a line that lands on the seabed stops
-there, where the free line's stiffness would carry it metres into the seabed and the contact throw it back.
+there, where the free line's stiffness would carry it metres into the seabed and the contact throw it back. A node
+joins the set where a solve puts it on or below the seabed, and leaves it where a solve lifts it: in the first
+solve always, in the later ones where the caller asks (``release_later``, ``physics/statics_newton.py``), each node
+leaving once per step (one that comes back stays, so that the solves cannot cycle).
 
 A segment carries tension only when taut. A segment that has been slack for ``SLACK_PATIENCE`` iterations (and
 one slack in the first guess: excess line laid on the seabed) keeps only a small floor stiffness
@@ -128,7 +131,7 @@ def _add_block(dmat, n, sign, m):
 def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling, orow, kmat):
     """Diagonal blocks D / tau^2 + K (``dmat``), the couplings of every segment's two ends (``coupling[s, 0]`` =
     K_ab, ``coupling[s, 1]`` = K_ba) and the right-hand side F + G (``state.node_acc``); ``taut``: segments that K
-    holds taut, ``node_down``: nodes on the seabed at the end of the step, ``kmat``: a 3x3 scratch block."""
+    holds taut, ``node_down``: nodes on the seabed at the end of the step (>= 1), ``kmat``: a 3x3 scratch block."""
     node_pos = state.node_pos
     seg_i = state.seg_i
     seg_f = state.seg_f
@@ -156,7 +159,7 @@ def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling
             continue
         k = seabed_stiffness_n_m(node_contact[n], env_f)
         penetration = seabed - node_pos[n, 2]
-        if node_down[n] == 1:
+        if node_down[n] >= 1:
             dmat[e, 2, 2] += k
             if penetration < 0.0:
                 rhs[e, 2] += k * penetration  # the gap to close before the seabed holds the node
@@ -223,7 +226,8 @@ def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling
 @jit_no_refcount
 def _predict_seabed(body_node, state, seabed, node_down, orow, release):
     """Update the nodes predicted on the seabed after the step in ``state.node_acc``; returns how many changed.
-    With ``release`` False a node on the seabed stays there (the set only grows: no cycling)."""
+    ``node_down``: 1 on the seabed, 2 on it again after leaving in this step (it stays), -1 left in this step, 0
+    not on it. With ``release`` a node the step lifts leaves the set (once per step), otherwise the set only grows."""
     node_pos = state.node_pos
     node_contact = state.node_contact
     node_acc = state.node_acc
@@ -232,10 +236,17 @@ def _predict_seabed(body_node, state, seabed, node_down, orow, release):
         e = orow[n, OR_EFF]
         if e < 0 or e == body_node or node_contact[n] <= 0.0:
             continue
-        down = 1 if node_pos[n, 2] + node_acc[e, 2] <= seabed else 0
-        if down != node_down[n] and (release or down == 1):
-            node_down[n] = down
-            changed += 1
+        z = node_pos[n, 2] + node_acc[e, 2]
+        held = node_down[n] >= 1
+        if not ((held and release and z > seabed) or (not held and z <= seabed)):
+            continue
+        if held:
+            if node_down[n] == 2:
+                continue
+            node_down[n] = -1  # left the set in this step
+        else:
+            node_down[n] = 2 if node_down[n] == -1 else 1
+        changed += 1
     return changed
 
 
@@ -254,9 +265,11 @@ def _start_sets(model, state, seg_age, taut, node_down):
 
 
 @jit_step
-def solve_step(inv_tau2, nq, body_node, basis, res_body, dq, model, state, scratch, tree, orow, seg_age):
+def solve_step(inv_tau2, nq, body_node, basis, res_body, dq, model, state, scratch, tree, orow, seg_age,
+               release_later):
     """The step at the present state (its loads evaluated) into ``state.node_acc`` (free nodes) and ``dq`` (the
-    anchor), solved again while the contacts it predicts change, and once more where, with the contacts settled,
+    anchor), solved again while the contacts it predicts change (``release_later``: a node the seabed set took in
+    may leave it again after the first solve, module docstring), and once more where, with the contacts settled,
     line-anchor contacts that would pull leave the set (``statics_contact.release_pulling``); at most
     ``ACTIVE_SET_ROUNDS`` solves, their number returned. ``scratch``: the arrays of :func:`new_scratch`."""
     dmat, coupling, taut, node_down, geo, cand, cin, bmat, cmat, coupled, body_a, body_r, blocks = scratch
@@ -275,7 +288,7 @@ def solve_step(inv_tau2, nq, body_node, basis, res_body, dq, model, state, scrat
         solves += 1
         if solves >= ACTIVE_SET_ROUNDS:
             return solves
-        changed = _predict_seabed(body_node, state, seabed, node_down, orow, solves == 1)
+        changed = _predict_seabed(body_node, state, seabed, node_down, orow, solves == 1 or release_later)
         if contact:
             changed += predict_contact(state, dq, geo, cand, cin, solves == 1)
             if changed == 0 and not released:  # once per step: the set settled, none of it may pull
