@@ -394,7 +394,7 @@ def test_first_try_from_the_guess_made_before_it_is_the_solve_from_the_guess():
 # The statics benchmark's scene 953 (seed 0), as drawn: fast preset fitted to the tight loop (0.5 m loop chain),
 # the vessels 149 m apart in 987 m of water, strong current. Which start converges on such a scene depends on the last
 # digits of the solve and on the solver's stages, so a change of either can call for another of the benchmark's
-# scenes whose fast start fails. With the Newton steps' seabed set releasing nodes far from the solution, no scene of
+# scenes whose fast start fails. With the Newton steps' seabed set releasing the nodes a later solve lifts, no scene of
 # the statics benchmark needs the default preset's start; with the set only growing (``seabed_set_grows``, the rule
 # ``solve_statics`` retries an unsolved scene with), this one does, and the tests of that start run it so.
 MIDDLE_START_SCENE = {"water_depth_m": 987.0481212000599, "vessel_spacing_m": 148.5188510787858,
@@ -448,14 +448,15 @@ def test_mapped_start_converges_with_the_slack_law_softened_first(monkeypatch):
 
     def spy(sim, start, args):
         report = solve(sim, start, args)
-        softened.append(report)
+        softened.append((report, statics.seabed_set_releases()))
         return report
 
     monkeypatch.setattr(statics, "_softened", spy)
     result = solve_statics(compile_scene(load_scene("gjoa-500", SOFTENED_START_SCENE)), progress=False)
     assert _largest_residual_ratio(result.simulator) < 1e-4
     assert result.simulator.env_f[L.EF_SLACK_SMOOTHING] == 0.0  # the rounding ends with the solve
-    assert softened and softened[-1] is not None and softened[-1].method == "newton"
+    assert softened and softened[-1][0] is not None and softened[-1][0].method == "newton"
+    assert all(releases for _, releases in softened)  # solved so at the first attempt, not by the retry
 
 
 # The statics benchmark's scene 791 (seed 0), as drawn: default lines, a long mooring line whose fibre rope the
@@ -579,8 +580,9 @@ RETRIED_WITH_THE_GROWING_SEABED_SET = {"water_depth_m": 1101.1614288158823, "ves
 
 def test_unsolved_scene_is_solved_again_with_the_seabed_set_growing(monkeypatch):
     """Reference: the scene's cause (its fibre rope rests on the seabed in the equilibrium). With the Newton steps'
-    seabed set releasing nodes far from the solution this scene does not converge; ``solve_statics`` solves it
-    again with the set only growing, which reaches the equilibrium and refuses the scene for its fibre."""
+    seabed set releasing the nodes a later solve lifts this scene does not converge; ``solve_statics`` solves it
+    again with the set only growing (before the relaxation of ``method="auto"``), which reaches the equilibrium and
+    refuses the scene for its fibre."""
     from moor_env import simulation as simulation_module
     from moor_env.errors import NoEquilibrium, StaticsNotConverged
     from moor_env.physics import statics
@@ -588,10 +590,10 @@ def test_unsolved_scene_is_solved_again_with_the_seabed_set_growing(monkeypatch)
     tries = []
     hanging = simulation_module._hanging_equilibrium
 
-    def spy(*args, **kwargs):
-        tries.append(statics._SEABED_RELEASE.get())
+    def spy(model, tol_m, progress, method, **kwargs):
+        tries.append((statics.seabed_set_releases(), method))
         try:
-            return hanging(*args, **kwargs)
+            return hanging(model, tol_m, progress, method, **kwargs)
         except (StaticsNotConverged, NoEquilibrium) as exc:
             tries.append(type(exc).__name__)
             raise
@@ -599,5 +601,6 @@ def test_unsolved_scene_is_solved_again_with_the_seabed_set_growing(monkeypatch)
     monkeypatch.setattr(simulation_module, "_hanging_equilibrium", spy)
     with pytest.raises(NoEquilibrium, match="fibre rope would rest on the seabed"):
         solve_statics(load_scene("gjoa-500", RETRIED_WITH_THE_GROWING_SEABED_SET), progress=False)
-    assert tries == [True, "StaticsNotConverged", False, "NoEquilibrium"]
-    assert statics._SEABED_RELEASE.get()  # the rule is back after the retry
+    # Newton's method alone first; the retry, before any relaxation, with the method asked for ("auto")
+    assert tries == [(True, "newton"), "StaticsNotConverged", (False, "auto"), "NoEquilibrium"]
+    assert statics.seabed_set_releases()  # the rule is back after the retry

@@ -71,7 +71,8 @@ from moor_env.physics.statics_stages import (
     stiffen_contact,
 )
 
-__all__ = ["SMOOTHING_FINAL", "n_static_dofs", "seabed_set_grows", "solve_equilibrium", "solve_newton"]
+__all__ = ["SMOOTHING_FINAL", "n_static_dofs", "seabed_set_grows", "seabed_set_releases", "solve_equilibrium",
+           "solve_newton"]
 
 MAX_ITERATIONS = 2000
 RAMP_DEPTH_M = 0.01  # a start with a line deeper than this inside the anchor takes the ramp (at rest: < 1 mm)
@@ -84,12 +85,19 @@ _SEABED_RELEASE = contextvars.ContextVar("seabed_release", default=True)
 def seabed_set_grows():
     """Within the block, every Newton step's seabed set only grows after its first solve
     (``physics/statics_newton.py``, ``C_SEABED_RELEASE``): the rule for a scene that the releases leave unsolved
-    (``moor_env.simulation.solve_statics``)."""
+    (``moor_env.simulation.solve_statics``). The setting is a context variable: it holds in this thread (and
+    context), not in threads started elsewhere."""
     token = _SEABED_RELEASE.set(False)
     try:
         yield
     finally:
         _SEABED_RELEASE.reset(token)
+
+
+def seabed_set_releases() -> bool:
+    """Whether the Newton steps' seabed sets release the nodes a later solve lifts (False within
+    :func:`seabed_set_grows`)."""
+    return _SEABED_RELEASE.get()
 
 
 def n_static_dofs(sim) -> int:
@@ -271,7 +279,7 @@ def _newton(sim, tol_rel: float, max_iter: int, max_step_m: float, warm: bool, a
     ctl = np.zeros(N_CTL)
     ctl[C_TAU] = 1e3 if warm else TAU_START_S
     ctl[C_MAX_STEP] = max_step_m
-    ctl[C_SEABED_RELEASE] = 1.0 if _SEABED_RELEASE.get() else 0.0
+    ctl[C_SEABED_RELEASE] = 1.0 if seabed_set_releases() else 0.0
     current = float(sim.env_f[L.EF_CUR_SCALE])
     stage = Stage(sim, ctl, max_iter, progress, not warm or mapped)
     sim.env_f[L.EF_SLACK_SMOOTHING] = SMOOTHING_FINAL

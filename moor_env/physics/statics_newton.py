@@ -26,14 +26,14 @@ a bound of 1e5 let the slowest solves wander (the residual swinging between 1e-2
 hundreds of iterations, a third of the steps taken back) and left one unconverged.
 Converged when the residual is within tolerance and the step at the state is below the step tolerance.
 
-The step's seabed set (``statics_system.solve_step``): a node that one of the step's solves put on the seabed
-leaves the set again where a later solve lifts it (once per step), unless ``C_SEABED_RELEASE`` is 0, where the set
-only grows after the step's first solve. Why: with the set only growing, whether a node near a touchdown is held
-turns on an intermediate solve, so that the step jumps between nearby states; in strong current, as a mooring
-line's touchdown swings over the seabed, the step test then takes back almost every step, however short (in the
-slowest such scenes of the statics benchmark, half to nine tenths of the steps taken back, nearly all of those
-shorter than a twentieth of their step, had a set other than the state's step). With the releases the set is the
-same at nearby states.
+The step's seabed set (``statics_system.solve_step``): a node on the seabed (at the state, or put there by one of
+the step's solves) leaves the set where a later solve lifts it (once per step), unless ``C_SEABED_RELEASE`` is 0,
+where the set only grows after the step's first solve. Why: where the set only grows, whether a node near a
+touchdown is held turns on an intermediate solve, so that the step jumps between nearby states; in strong current,
+as a mooring line's touchdown swings over the seabed, the step test then takes back almost every step, however
+short (in the slowest such scenes of the statics benchmark, half to nine tenths of the steps taken back, nearly all
+of those shorter than a twentieth of their step, have a set other than the state's step). With the releases the
+sets of nearby states mostly agree.
 """
 
 from __future__ import annotations

@@ -54,6 +54,11 @@ from moor_env.physics.tree import OR_EFF
 
 SLACK_STIFFNESS = 1e-6  # least stiffness of a segment in K, as a fraction of EA / l0 (keeps K regular)
 SLACK_PATIENCE = 3  # iterations a segment is slack before K lets it go
+# a node's place in a step's seabed set (``node_down``): held on the seabed at and above SEABED_DOWN
+SEABED_UP = 0
+SEABED_DOWN = 1
+SEABED_BACK = 2  # held again after leaving in this step: it stays
+SEABED_LEFT = -1  # left in this step
 ACTIVE_SET_ROUNDS = 8  # solves per step at most while the predicted seabed and line-anchor contacts change
 
 
@@ -131,7 +136,8 @@ def _add_block(dmat, n, sign, m):
 def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling, orow, kmat):
     """Diagonal blocks D / tau^2 + K (``dmat``), the couplings of every segment's two ends (``coupling[s, 0]`` =
     K_ab, ``coupling[s, 1]`` = K_ba) and the right-hand side F + G (``state.node_acc``); ``taut``: segments that K
-    holds taut, ``node_down``: nodes on the seabed at the end of the step (>= 1), ``kmat``: a 3x3 scratch block."""
+    holds taut, ``node_down``: nodes on the seabed at the end of the step (``SEABED_DOWN`` and up), ``kmat``: a
+    3x3 scratch block."""
     node_pos = state.node_pos
     seg_i = state.seg_i
     seg_f = state.seg_f
@@ -159,7 +165,7 @@ def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling
             continue
         k = seabed_stiffness_n_m(node_contact[n], env_f)
         penetration = seabed - node_pos[n, 2]
-        if node_down[n] >= 1:
+        if node_down[n] >= SEABED_DOWN:
             dmat[e, 2, 2] += k
             if penetration < 0.0:
                 rhs[e, 2] += k * penetration  # the gap to close before the seabed holds the node
@@ -225,9 +231,9 @@ def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling
 
 @jit_no_refcount
 def _predict_seabed(body_node, state, seabed, node_down, orow, release):
-    """Update the nodes predicted on the seabed after the step in ``state.node_acc``; returns how many changed.
-    ``node_down``: 1 on the seabed, 2 on it again after leaving in this step (it stays), -1 left in this step, 0
-    not on it. With ``release`` a node the step lifts leaves the set (once per step), otherwise the set only grows."""
+    """Update the nodes predicted on the seabed after the step in ``state.node_acc`` (``node_down``, ``SEABED_*``
+    values); returns how many changed. With ``release`` a node on the seabed that the step lifts leaves the set
+    (once per step: one that comes back stays), otherwise the set only grows."""
     node_pos = state.node_pos
     node_contact = state.node_contact
     node_acc = state.node_acc
@@ -237,15 +243,14 @@ def _predict_seabed(body_node, state, seabed, node_down, orow, release):
         if e < 0 or e == body_node or node_contact[n] <= 0.0:
             continue
         z = node_pos[n, 2] + node_acc[e, 2]
-        held = node_down[n] >= 1
-        if not ((held and release and z > seabed) or (not held and z <= seabed)):
-            continue
-        if held:
-            if node_down[n] == 2:
+        if node_down[n] >= SEABED_DOWN:
+            if not (release and z > seabed and node_down[n] == SEABED_DOWN):
                 continue
-            node_down[n] = -1  # left the set in this step
+            node_down[n] = SEABED_LEFT
+        elif z <= seabed:
+            node_down[n] = SEABED_BACK if node_down[n] == SEABED_LEFT else SEABED_DOWN
         else:
-            node_down[n] = 2 if node_down[n] == -1 else 1
+            continue
         changed += 1
     return changed
 
@@ -261,7 +266,7 @@ def _start_sets(model, state, seg_age, taut, node_down):
         length = segment_axis(node_pos, seg_i[s, L.SI_A], seg_i[s, L.SI_B])[0]
         taut[s] = 1 if length > seg_f[s, L.SF_L0] or seg_age[s] < SLACK_PATIENCE else 0
     for n in range(node_pos.shape[0]):
-        node_down[n] = 1 if node_pos[n, 2] <= seabed else 0
+        node_down[n] = SEABED_DOWN if node_pos[n, 2] <= seabed else SEABED_UP
 
 
 @jit_step
