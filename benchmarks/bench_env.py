@@ -13,7 +13,8 @@ scene as it is, without waves (Hs 0, no warm-up): its slack loop hangs and falls
 runs the pre-release phase at the scene's own step (``control.pre_release_dt_s`` and ``pre_release_dt_calm_s`` null)
 for comparison. The ``fresh geometry`` variant (single env, calm water, no current) draws every episode's geometry
 from the config's ranges (depth, spacing, line length, anchor mass), so every reset solves a new equilibrium on a
-newly compiled model; it records the reset and whole-episode times (median) and where the time goes.
+newly compiled model; it records the reset and whole-episode times (median) and where the time goes, and again
+on the same geometries with the fall's step growing up to 3x (``discretization.fall_step_growth_max``).
 ``--variant NAME`` runs one variant and merges its rows into the committed JSON (the other rows keep their numbers).
 
 Measured for each env: wall time, CPU time of every process involved (``/proc`` for worker processes), transitions
@@ -57,6 +58,9 @@ OVERRIDES = {f"scenario.{k}": v for k, v in SCENE.items()}  # autoresets draw fr
 CALM = {"scenario.sea_state_hs_m": 0.0}  # the bundled default scene as it is: no waves
 FRESH = {"scenario.sea_state_hs_m": 0.0, "scenario.current_scale": 0.0}  # geometry from the config's ranges
 FRESH_LABEL = "fresh geometry"
+# the same with the fall's step grown where the lines move slowly (docs/fall-accuracy.md; off in the presets)
+FRESH_GROWING = {**FRESH, "fidelity.discretization.fall_step_growth_max": 3.0}
+FRESH_GROWING_LABEL = "fresh geometry, fall step growing 3x"
 RELEASE_STEP = 59  # 0-based: 59 holding steps, release on the 60th
 SINGLE_EPISODES_FACTOR = 4  # the single env's episodes are cheap and its CPU per episode is the target: more of them
 
@@ -103,10 +107,10 @@ def bench_single(episodes: int, overrides: dict) -> dict:
                               "max": max(episode_cpu)}}
 
 
-def bench_fresh_geometry(episodes: int) -> dict:
+def bench_fresh_geometry(episodes: int, overrides: dict) -> dict:
     """Single env, calm water, every episode on a new geometry drawn from the config's ranges (a new equilibrium
     and compiled model at every reset): reset and whole-episode wall and CPU time, median and spread."""
-    env = gym.make(ENV_ID, overrides=FRESH)
+    env = gym.make(ENV_ID, overrides=overrides)
     for seed in (0, 1):  # compiles the kernels; then the timed episodes draw geometries not seen before
         env.reset(seed=seed)
         for k in range(RELEASE_STEP + 1):
@@ -245,10 +249,16 @@ def env_table(rows: list[dict]) -> str:
                   "CPU s/episode", "CPU ms/transition", "kernel share"], out)
 
 
-def fresh_table(fresh: dict) -> str:
-    """The ``fresh geometry`` run as a line and a markdown table (milliseconds)."""
+def fresh_table(fresh: dict, growing: dict | None = None) -> str:
+    """The ``fresh geometry`` run (and the one with the growing fall step, where given) as a line and a markdown
+    table (milliseconds)."""
     def ms(stats: dict) -> str:
         return f"{1e3 * stats['median']:.1f} / {1e3 * stats['p90']:.1f}"
+
+    def row(label: str, run: dict) -> list:
+        return [label, run["episodes"], ms(run["reset_wall_s"]), ms(run["reset_cpu_s"]),
+                f"{1e3 * run['solve_wall_s_mean']:.1f}", ms(run["episode_wall_s"]), ms(run["episode_cpu_s"]),
+                ms(run["release_step_wall_s"])]
 
     date = fresh["date"][:19].replace("T", " ")
     head = (f"`{COMMAND} --variant fresh-geometry`, run {date} UTC on {fresh['machine']} (1-min load average "
@@ -256,11 +266,13 @@ def fresh_table(fresh: dict) -> str:
             f"env, calm water, no current, {fresh['episodes']} episodes, each on a new geometry drawn from the "
             f"config's ranges ({fresh['solves']} static solves, {fresh['scenario_redraws']} redraws). Times in ms, "
             "median / 90th percentile; `release step` is the last step (remesh and fall to touchdown).")
-    row = [FRESH_LABEL, fresh["episodes"], ms(fresh["reset_wall_s"]), ms(fresh["reset_cpu_s"]),
-           f"{1e3 * fresh['solve_wall_s_mean']:.1f}", ms(fresh["episode_wall_s"]), ms(fresh["episode_cpu_s"]),
-           ms(fresh["release_step_wall_s"])]
+    rows = [row(FRESH_LABEL, fresh)]
+    if growing is not None:
+        head += (f" `{FRESH_GROWING_LABEL}`: the same geometries with `discretization.fall_step_growth_max: 3` "
+                 "([fall-accuracy.md](fall-accuracy.md)).")
+        rows.append(row(FRESH_GROWING_LABEL, growing))
     return head + "\n\n" + table(["variant", "episodes", "reset", "reset CPU", "solve (mean)", "episode",
-                                  "episode CPU", "release step"], [row])
+                                  "episode CPU", "release step"], rows)
 
 
 def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
@@ -282,7 +294,7 @@ def docs_blocks(result: dict) -> list[tuple[Path, str, str]]:
                      f"{b['batched_over_async_upper_bound']:.2f}x.")
     fresh = result.get("fresh_geometry")
     if fresh is not None:
-        lines += ["", fresh_table(fresh), ""]
+        lines += ["", fresh_table(fresh, result.get("fresh_geometry_growing")), ""]
     single = {r["variant"]: r for r in rows if r["env"] == "single"}
     calm, waves = single.get("calm default scene"), single.get("default config")
     ratios = result["batched_over_async_transitions"]
@@ -327,15 +339,16 @@ def main(argv: list[str] | None = None) -> dict:
     episodes = 1 if args.quick else args.episodes
     load_before = os.getloadavg()[0]
     if args.variant == "fresh-geometry":
-        fresh = bench_fresh_geometry(4 if args.quick else args.fresh_episodes)
         result = load_result("bench_env")
-        result["fresh_geometry"] = {**run_record(load_before), "python": platform.python_version(),
-                                    "config": "anchor-release (default)", "overrides": FRESH, **fresh}
+        for key, overrides in (("fresh_geometry", FRESH), ("fresh_geometry_growing", FRESH_GROWING)):
+            fresh = bench_fresh_geometry(4 if args.quick else args.fresh_episodes, overrides)
+            result[key] = {**run_record(load_before), "python": platform.python_version(),
+                           "config": "anchor-release (default)", "overrides": overrides, **fresh}
         result["targets"] = {**result.get("targets", {}), "fresh_reset_wall_s_median": 0.020,
                              "fresh_episode_wall_s_median": 0.040}
         RESULTS.write_text(json.dumps(result, indent=2))
         write_blocks(docs_blocks(result))
-        print(fresh_table(result["fresh_geometry"]))
+        print(fresh_table(result["fresh_geometry"], result["fresh_geometry_growing"]))
         return result
     variants = [("default config", OVERRIDES)]
     if not args.no_compare:

@@ -61,9 +61,9 @@ from moor_env.physics.anchor import tilt_deg  # noqa: E402
 
 try:  # the breakdown needs the record kernels; a baseline tree from before them is timed on whole runs only
     from moor_env.physics import implicit as imp  # noqa: E402
-    from moor_env.physics.implicit_active_set import update_active_set  # noqa: E402
+    from moor_env.physics.implicit_active_set import predict_turns, update_active_set  # noqa: E402
     from moor_env.physics.implicit_assembly import assemble  # noqa: E402
-    from moor_env.physics.integrate import compute_loads  # noqa: E402
+    from moor_env.physics.integrate import compute_loads, speed_step_factor  # noqa: E402
 except ImportError:
     compute_loads = None
 
@@ -257,16 +257,19 @@ def solves_per_step(case: Case) -> dict:
     end = case.t_end_s
     counts = []
     while st.t < end - 0.5 * sim.dt:
+        h = sim.dt * (speed_step_factor(st.node_i, st.node_vel, sim.step_growth_max)
+                      if sim.step_growth_max > 1.0 else 1.0)
         sim.evaluate_loads()
         model, state = sim.records()
         body_node = _body_node(model, state)
         tree = w.pos0.view(np.int64)
         orow = w.vel0.view(np.int64)
         nq = imp.prepare(False, body_node, state, tree, orow)
+        predict_turns(h, state, orow)
         n = 0
         for it in range(imp.MAX_ACTIVE_SET_SOLVES):
             n += 1
-            if _solve_once(it == 0, 2, sim.dt, nq, body_node, model, state, tree, orow) == 0:
+            if _solve_once(it == 0, 2, h, nq, body_node, model, state, tree, orow) == 0:
                 break
         counts.append(n)
         status, _ = sim.advance_to(st.t + sim.dt, detect_touchdown=case.fall)

@@ -15,6 +15,8 @@ is driven by the seeded random controls of ``benchmarks/pre_release_step.py``. C
   fidelity;
 * ``default``: what the env does (in waves: tight_line with its ``in_waves`` keys, a 1 m loop chain, throughout;
   the implicit fall at the model's 11.25 ms step);
+* ``default, fall step growing 3x`` and ``2x``: the same with the fall's step grown where the lines move slowly,
+  up to 3 and 2 times the model's step (``discretization.fall_step_growth_max``);
 * ``default, fall at 2x its step``: the same with the implicit fall at twice the model's step (22.5 ms in waves);
 * ``tight_line, 0.5 m loop``: the reference's resolution with the implicit fall (5.6 ms), the env's choice in
   waves before the ``in_waves`` keys;
@@ -70,13 +72,17 @@ VERTICAL_DEG = 1.0
 ON_BACK_END_M = 0.05  # a chain whose end is within this of the back end (or past it) has reached the anchor
 INSIDE_M = 0.05  # past the back end by more than this: inside the anchor, beyond the contact's penetration
 TRACE_INTERVAL_S = 0.01
+DEFAULT_EPISODES = 72
 # name, env overrides, pre-release resolution forced ({}: coarse; None: the env's), fall resolution (False: env's),
 # fall step as a multiple of the fall model's step
 LOOP_05M = "tight_line, 0.5 m loop"
 LOOP_1M = "tight_line, 1 m loop"
+GROWING_STEP = "default, fall step growing 3x"
 CASES = (
     ("reference", EXPLICIT_FALL, TIGHT, TIGHT, 1.0),
     ("default", {}, None, False, 1.0),
+    (GROWING_STEP, {"fidelity.discretization.fall_step_growth_max": 3.0}, None, False, 1.0),
+    ("default, fall step growing 2x", {"fidelity.discretization.fall_step_growth_max": 2.0}, None, False, 1.0),
     ("default, fall at 2x its step", {}, None, False, 2.0),
     (LOOP_05M, {}, TIGHT, TIGHT, 1.0),
     (LOOP_1M, {}, TIGHT_WAVES, TIGHT_WAVES, 1.0),
@@ -195,17 +201,21 @@ def docs_blocks(result: dict, stem: str) -> list[tuple[Path, str, str]]:
                      f"{tilt['median']:.2f} / {tilt['p90']:.2f}"]
         rows.append([name, *diffs, f"{s['fast_and_vertical']} of {n}",
                      f"{s['chain_past_back_end_at_touchdown']} of {n}", f"{s['cpu_s_median']:.3f}"])
-    command = "python benchmarks/fall_reference.py" + (" --calm" if stem.endswith("_calm") else "")
+    ref = result["summary"]["reference"]
+    episodes = ref["episodes"] + ref["failures"]
+    command = ("python benchmarks/fall_reference.py" + (" --calm" if stem.endswith("_calm") else "")
+               + (f" --episodes {episodes}" if episodes != DEFAULT_EPISODES else ""))
     text = [run_line(result, command) + f" Reference: {result['reference']}; fast and vertical: "
             f"{result['fast_and_vertical']}.", "",
             table(["case", "speed diff median / p90 [m/s]", "signed mean [m/s]", "tilt diff median / p90 [deg]",
                    "fast and vertical", "chain inside", "CPU s/episode"], rows)]
     loop = LOOP_1M if LOOP_1M in result["summary"] else "default"
-    paired = paired_loops(result["rows"], loop)
-    if paired is not None:
-        text += ["", f"Paired on the episodes, `{loop}` minus `{LOOP_05M}`: mean absolute speed difference to the "
-                 f"reference {paired['mean']:+.3f} m/s [{paired['ci'][0]:+.3f}, {paired['ci'][1]:+.3f}] (paired "
-                 f"bootstrap 95 %, {paired['episodes']} episodes)."]
+    for case, base in ((loop, LOOP_05M), (GROWING_STEP, "default")):
+        paired = paired_cases(result["rows"], case, base)
+        if paired is not None:
+            text += ["", f"Paired on the episodes, `{case}` minus `{base}`: mean absolute speed difference to the "
+                     f"reference {paired['mean']:+.3f} m/s [{paired['ci'][0]:+.3f}, {paired['ci'][1]:+.3f}] (paired "
+                     f"bootstrap 95 %, {paired['episodes']} episodes)."]
     split_rows = []
     for part, label in SPLITS:
         split = result.get(f"summary_reference_chain_{part}")
@@ -222,13 +232,13 @@ def docs_blocks(result: dict, stem: str) -> list[tuple[Path, str, str]]:
     return [(DOC, stem, "\n".join(text)), (DOC, f"{stem}:split", split_text)]
 
 
-def paired_loops(rows: list[dict], loop: str) -> dict | None:
-    """Mean over the episodes of |speed - reference| of ``loop`` minus that of the 0.5 m loop, with its paired
+def paired_cases(rows: list[dict], case: str, base: str) -> dict | None:
+    """Mean over the episodes of |speed - reference| of ``case`` minus that of ``base``, with its paired
     bootstrap interval (None where a case is missing)."""
     by_case: dict[str, dict[int, float | None]] = {}
     for r in rows:
         by_case.setdefault(r["case"], {})[r["seed"]] = r["speed_m_s"]
-    ref, a, b = by_case.get("reference"), by_case.get(loop), by_case.get(LOOP_05M)
+    ref, a, b = by_case.get("reference"), by_case.get(case), by_case.get(base)
     if ref is None or a is None or b is None:
         return None
     seeds = [k for k, v in ref.items() if v is not None and a.get(k) is not None and b.get(k) is not None]
@@ -251,7 +261,7 @@ def docs_from_results() -> list[tuple[Path, str, str]]:
 def main(argv: list[str] | None = None) -> dict:
     """Run every case on every episode and the trace; write the JSON and the figure, print a table."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--episodes", type=int, default=72)
+    parser.add_argument("--episodes", type=int, default=DEFAULT_EPISODES)
     parser.add_argument("--calm", action="store_true", help="no waves (Hs 0); writes fall_reference_calm.json")
     parser.add_argument("--trace-seed", type=int, default=1002, help="episode whose fall is traced (-1: none)")
     parser.add_argument("--docs-only", action="store_true",

@@ -65,6 +65,10 @@ class Simulator:
         The sampled vessel motion the kernels read (:meth:`set_vessel_motion`).
     dt : float
         The integration step [s].
+    step_growth_max : float
+        How many times an implicit step may grow where the lines move slower than its cap assumes
+        (:func:`~moor_env.physics.integrate.speed_step_factor`); 1 (fixed steps) until the release, then
+        ``discretization.fall_step_growth_max``.
     """
 
     def __init__(self, model: Model) -> None:
@@ -74,6 +78,7 @@ class Simulator:
         self.state = model.initial_state()
         self.dt = model.dt_s
         self.integrator_code = integrator_code(model.integrator)
+        self.step_growth_max = 1.0
         self.fall_integration = fall_time_step(model)  # (integrator, step [s]) of the fall, or None; checked here, not
         # at the release, so that a fall integrator the mesh does not allow is refused before any step
         self.vessel_mean_m = model.vessel_base_m.copy()
@@ -166,7 +171,8 @@ class Simulator:
         """
         st = self.state
         status, t, n_steps, fail_kind, fail_index = advance(*self.records(), st.t, t_end_s, self.dt,
-                                                            self.integrator_code, detect_touchdown, history_every)
+                                                            self.integrator_code, detect_touchdown, history_every,
+                                                            self.step_growth_max)
         st.t = t
         if status >= L.STATUS_NONFINITE:
             raise SimulationDiverged(t, self.component_name(fail_kind, fail_index), L.STATUS_NAMES[status])
@@ -217,6 +223,7 @@ class Simulator:
         if self.fall_integration is not None:
             self.integrator_code = integrator_code(self.fall_integration[0])
             self.dt = self.fall_integration[1]
+        self.step_growth_max = m.scene.discretization.fall_step_growth_max
         if m.release_node >= 0:
             self.release_point_m = st.node_pos[m.release_node].copy()
             st.node_i[m.release_node, L.NI_KIND] = L.NODE_FREE

@@ -68,13 +68,13 @@ ROW_SLOT = ROW_STATE + len(StateRecord.FIELDS)
 ROW_BACKUP = ROW_SLOT + len(SlotRecord.FIELDS)
 N_ROWS = ROW_BACKUP + len(STATE_FIELDS)
 # columns of a scene's per-call scalars (float64 table) and results (int64 / float64 tables)
-IN_T, IN_T_END, IN_DT, IN_INTEGRATOR, IN_DETECT, IN_BACKUP = range(6)
+IN_T, IN_T_END, IN_DT, IN_INTEGRATOR, IN_DETECT, IN_BACKUP, IN_STEP_GROWTH = range(7)
 # IN_BACKUP (a job's ``take_backup``): 0 an advance at the scene's step; TAKE_BACKUP a coarse one, the state backed
 # up first; BACKED_UP a later chunk of a coarse one (backed up before its first chunk). Both coarse kinds are
 # checked against the lines' breaking loads, so that chunking a coarse advance never changes its result.
 TAKE_BACKUP = 1
 BACKED_UP = 2
-N_IN = 6
+N_IN = 7
 OUT_STATUS, OUT_STEPS, OUT_FAIL_KIND, OUT_FAIL_INDEX = range(4)
 
 @numba.njit(cache=True, nogil=True)
@@ -84,8 +84,8 @@ def advance_many(scalars, addresses, out_i, out_t):
     Parameters
     ----------
     scalars : float64[n, N_IN]
-        t, t_end, dt [s], integrator code, detect touchdown (0/1), back the state up first (0/1) (``IN_*``
-        columns).
+        t, t_end, dt [s], integrator code, detect touchdown (0/1), back the state up first (0/1), the implicit
+        step's largest growth (``Simulator.step_growth_max``) (``IN_*`` columns).
     addresses : int64[n, N_ROWS, record_table.N_TABLE_COLUMNS]
         Each scene's table rows (``ROW_*``; see the module docstring).
     out_i : int64[n, 4]
@@ -105,7 +105,7 @@ def advance_many(scalars, addresses, out_i, out_t):
         max_tension_before = state.line_f[:, L.LF_MAX_TENSION].copy() if coarse else np.empty(0)
         status, t_reached, n_steps, fail_kind, fail_index = advance(
             model, state, scalars[i, IN_T], scalars[i, IN_T_END], scalars[i, IN_DT],
-            np.int64(scalars[i, IN_INTEGRATOR]), scalars[i, IN_DETECT] != 0.0, 0)
+            np.int64(scalars[i, IN_INTEGRATOR]), scalars[i, IN_DETECT] != 0.0, 0, scalars[i, IN_STEP_GROWTH])
         if status < L.STATUS_NONFINITE:
             max_strain, worst_seg = compute_accelerations(model, state)
             failed, kind, index = end_state_status(model, state, max_strain, worst_seg, max_tension_before)
@@ -231,7 +231,7 @@ class BatchAdvancer:
             entry = self._entry(sim, buffers)
             entries.append(entry)
             addresses[i] = entry.table
-            scalars[i] = (sim.state.t, t_stop, step_s, sim.integrator_code, detect, backup)
+            scalars[i] = (sim.state.t, t_stop, step_s, sim.integrator_code, detect, backup, sim.step_growth_max)
         out_i = np.zeros((n, 4), dtype=np.int64)
         out_t = np.zeros(n)
         t0 = time.thread_time()

@@ -47,6 +47,7 @@ from moor_env.physics.layout import (
     N_BODY_STATE,
     NI_KIND,
     NODE_FREE,
+    NODE_INACTIVE,
     SI_ACTIVE,
     SI_LINE,
     SI_MAT,
@@ -64,6 +65,7 @@ from moor_env.physics.layout import (
 )
 from moor_env.physics.line import apply_payout
 from moor_env.physics.loads import compute_accelerations, compute_loads, set_constrained_nodes
+from moor_env.physics.stability import REFERENCE_SPEED_M_S
 
 INTEGRATOR_SYMPLECTIC_EULER = 0
 INTEGRATOR_RK2 = 1
@@ -291,12 +293,33 @@ def _keep_segment_counts(line_i, nseg):
     return same
 
 
+@jit_no_refcount(inline="always")
+def speed_step_factor(node_i, node_vel, growth_max):
+    """How many times the implicit step may be lengthened at these velocities of the active nodes [m/s]: its accuracy
+    cap lets a node at ``REFERENCE_SPEED_M_S`` cross half the shortest segment (``stability.implicit_time_step``);
+    where the fastest node is slower, it crosses as little in a longer step. Between 1 and ``growth_max``; 1 where
+    a speed is not finite."""
+    v2max = 0.0
+    for n in range(node_vel.shape[0]):
+        if node_i[n, NI_KIND] == NODE_INACTIVE:
+            continue
+        v2 = node_vel[n, 0] ** 2 + node_vel[n, 1] ** 2 + node_vel[n, 2] ** 2
+        if v2 != v2:
+            return 1.0
+        v2max = max(v2max, v2)
+    if not (v2max * growth_max * growth_max > REFERENCE_SPEED_M_S * REFERENCE_SPEED_M_S):
+        return growth_max
+    return max(1.0, REFERENCE_SPEED_M_S / math.sqrt(v2max))
+
+
 @jit_step
-def advance(model, state, t, t_end, dt, integrator, detect_touchdown, hist_every):
+def advance(model, state, t, t_end, dt, integrator, detect_touchdown, hist_every, step_growth_max):
     """Step from ``t`` until the step nearest ``t_end`` [s], touchdown of the anchor tip, or a blow-up.
 
     Only whole steps of ``dt`` are taken, so the time reached is within dt/2 of ``t_end`` and a run split into
-    several calls is bit-identical to one call.
+    several calls is bit-identical to one call. With ``step_growth_max`` > 1 (``implicit_euler`` only) each step
+    is ``dt`` times :func:`speed_step_factor` of the state it starts from, and the last step may end past
+    ``t_end``; a step's length depends on its start state alone, so a split run is still bit-identical.
 
     Touchdown (``detect_touchdown``) is interpolated linearly inside the step in which the tip crosses
     z = -depth: its time, tip position, tip velocity and axis are written to ``state.touchdown``. Every
@@ -322,6 +345,7 @@ def advance(model, state, t, t_end, dt, integrator, detect_touchdown, hist_every
     set_constrained_nodes(model, state, t)
     # whole steps only, so that splitting a run into calls never changes the step sequence (determinism)
     h = dt
+    grow = step_growth_max > 1.0 and integrator == INTEGRATOR_IMPLICIT_EULER
     # the topology is trusted only from the second step of a call on: between calls the caller may release,
     # drop a line or restore a state; within a call only a payout split or merge changes it (segment count)
     nseg = line_i[:, LI_NSEG].copy()
@@ -332,6 +356,8 @@ def advance(model, state, t, t_end, dt, integrator, detect_touchdown, hist_every
             e0x = body_state[BS_AXIS]
             e0y = body_state[BS_AXIS + 1]
             e0z = body_state[BS_AXIS + 2]
+        if grow:
+            h = dt * speed_step_factor(state.node_i, state.node_vel, step_growth_max)
         status, fail_kind, fail_index = step(model, state, t, h, integrator, same_topology)
         same_topology = _keep_segment_counts(line_i, nseg)
         n_steps += 1

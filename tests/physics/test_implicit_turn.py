@@ -4,7 +4,8 @@ The step moves every node by h v1, so a segment that turns at v_perp across itse
 (h v_perp)^2 / (2 l0) longer than its spring linearised at the start direction holds it; the next load evaluation
 would read EA times that stretch (a 1 m segment of 142 mm chain turned at 10 m/s over 11.25 ms: 0.63 % strain,
 11 MN). Where that excess passes ``TURN_TOLERANCE`` the segment's spring is linearised again at its predicted end
-chord and the step solved again.
+chord and the step solved again; where the start velocities foresee the turn, from the first solve on
+(``implicit_active_set.predict_turns``).
 """
 
 from __future__ import annotations
@@ -15,8 +16,12 @@ import numpy as np
 import pytest
 
 from moor_env import load_scene, solve_statics
+from moor_env.physics import implicit as I
 from moor_env.physics import implicit_active_set as S
 from moor_env.physics import layout as L
+from moor_env.physics import tree as T
+from moor_env.physics.records import ModelRecord, StateRecord
+from tests.physics.test_implicit import _record
 
 IMPLICIT = {"integrator": "implicit_euler"}
 REFERENCE_SUBSTEPS = 64  # 0.18 ms: below the explicit limit of the 1 m chain's axial mode (0.34 ms)
@@ -51,8 +56,8 @@ def _kicked_step(v_perp_m_s: float, substeps: int) -> tuple[np.ndarray, object]:
 def test_turning_segment_keeps_the_substepped_tension(v_perp_m_s):
     """Reference: the same interval in 64 implicit sub-steps (0.18 ms; 32 and 128 sub-steps agree within 0.5 %).
     A node of the hanging 142 mm chain (1 m segments, EA 1.74 GN, 0.78 MN) kicked across the chain at v_perp:
-    after one step of 11.25 ms both its segments carry the reference tension within 25 % (measured 9 %, 19 %,
-    16 % at 5, 10, 15 m/s: 0.84, 0.99, 1.25 MN against 0.92, 1.22, 1.49 MN); the spring linearised at the start
+    after one step of 11.25 ms both its segments carry the reference tension within 25 % (measured 9 %, 20 %,
+    21 % at 5, 10, 15 m/s: 0.84, 0.98, 1.18 MN against 0.92, 1.22, 1.49 MN); the spring linearised at the start
     direction alone left 1.8, 5.0 and 10.0 MN (2, 4 and 6.7 times the reference)."""
     reference, _ = _kicked_step(v_perp_m_s, REFERENCE_SUBSTEPS)
     one_step, sim = _kicked_step(v_perp_m_s, 1)
@@ -71,3 +76,64 @@ def test_only_a_turning_segment_is_linearised_again():
     segs = _hanging_chain()[3]
     assert set(np.nonzero(sim.work.seg_chord[:, 3])[0]) == set(segs)
     assert S.TURN_TOLERANCE == 1e-4
+
+
+def _predicted_chords(v_perp_m_s: float) -> tuple[np.ndarray, object, tuple[int, int], int]:
+    """The hanging chain's middle node kicked across it at ``v_perp_m_s``; the start of a step of the model's
+    step: the elimination order and the taut set prepared, then ``predict_turns``. Returns ``seg_chord``, the
+    simulator, the node's two segments and the node."""
+    sim, start, node, segs = _hanging_chain()
+    sim.state = start.copy()
+    sim.state.node_vel[node] = (v_perp_m_s, 0.0, 0.0)
+    sim.evaluate_loads()
+    w = sim.work
+    body_node = int(np.nonzero(sim.state.node_i[:, L.NI_KIND] == L.NODE_BODY)[0][0])
+    tree, orow = w.pos0.view(np.int64), w.vel0.view(np.int64)
+    model, state = sim.records()
+    I.prepare(False, body_node, state, tree, orow)
+    assert all(S.is_active(orow, s) for s in segs)
+    S.predict_turns(sim.model.dt_s, state, orow)
+    return w.seg_chord.copy(), sim, segs, node
+
+
+def test_a_foreseen_turn_is_linearised_from_the_first_solve():
+    """A taut segment whose start velocities turn it beyond ``TURN_TOLERANCE`` within the step starts linearised
+    along its predicted end chord d0 + h (v_b - v_a), at its present length (its present tension: at the
+    predicted chord's own length the spring would hold the node across the chain with the geometric stiffness
+    of a turn's stretch); at 0.5 m/s (turn strain 1.6e-5) none is."""
+    chords, _, _, _ = _predicted_chords(0.5)
+    assert not np.any(chords[:, 3])
+    chords, sim, segs, node = _predicted_chords(10.0)
+    assert set(np.nonzero(chords[:, 3])[0]) == set(segs)
+    st, h = sim.state, sim.model.dt_s
+    for s in segs:
+        a, b = st.seg_i[s, L.SI_A], st.seg_i[s, L.SI_B]
+        start = st.node_pos[b] - st.node_pos[a]
+        predicted = start + h * (st.node_vel[b] - st.node_vel[a])
+        expected = predicted * np.linalg.norm(start) / np.linalg.norm(predicted)
+        np.testing.assert_allclose(chords[s, :3], expected, rtol=0, atol=1e-12)
+
+
+def test_an_entering_segment_is_linearised_along_its_solved_direction():
+    """A slack segment that the solve carries taut and turns (its end chord beyond its linear prediction by more
+    than ``TURN_TOLERANCE``) enters the set linearised at its unstretched length along that chord, not at the
+    chord itself (which the solve, without its spring, overstretched)."""
+    node_pos = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -0.999]])
+    node_vel = np.array([[0.0, 0.0, 0.0], [2.0, 0.0, 0.0]])  # the lower node swings sideways at 2 m/s
+    seg_i = np.zeros((1, L.N_SEG_I), np.int64)
+    seg_i[0, [L.SI_A, L.SI_B, L.SI_ACTIVE]] = 0, 1, 1
+    seg_f = np.ones((1, L.N_SEG_F))
+    mat_f = np.zeros((1, L.N_MAT_F))
+    mat_f[0, L.MF_EA], mat_f[0, L.MF_MASS], mat_f[0, L.MF_ZETA] = 1e9, 400.0, 0.3
+    node_acc = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -0.1]])  # the solve moves it down 0.1 m/s more
+    orow = np.zeros((2, 3), np.int64)
+    orow[:, T.OR_EFF] = -1, 1
+    model = _record(ModelRecord, mat_f=mat_f)
+    state = _record(StateRecord, node_pos=node_pos, node_vel=node_vel, seg_i=seg_i, seg_f=seg_f, node_acc=node_acc,
+                    seg_chord=np.zeros((1, 4)))
+    h = 0.1
+    assert S.update_active_set(h, model, state, orow) == 1
+    assert S.is_active(orow, 0) == 1
+    end_chord = node_pos[1] - node_pos[0] + h * (node_vel[1] + node_acc[1])
+    assert state.seg_chord[0, 3] == 1.0
+    np.testing.assert_allclose(state.seg_chord[0, :3], end_chord / np.linalg.norm(end_chord), rtol=0, atol=1e-15)
