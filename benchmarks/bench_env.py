@@ -107,48 +107,77 @@ def bench_single(episodes: int, overrides: dict) -> dict:
                               "max": max(episode_cpu)}}
 
 
-def bench_fresh_geometry(episodes: int, overrides: dict) -> dict:
-    """Single env, calm water, every episode on a new geometry drawn from the config's ranges (a new equilibrium
-    and compiled model at every reset): reset and whole-episode wall and CPU time, median and spread."""
-    env = gym.make(ENV_ID, overrides=overrides)
-    for seed in (0, 1):  # compiles the kernels; then the timed episodes draw geometries not seen before
-        env.reset(seed=seed)
-        for k in range(RELEASE_STEP + 1):
-            env.step(_actions(np.array([k]))[0])
-    core = env.unwrapped.core
-    reset_wall, reset_cpu, episode_wall, episode_cpu, fall_wall, redraws, origins = [], [], [], [], [], 0, set()
-    solves0, solve_s0 = core.equilibria.solves, core.equilibria.solve_wall_s
-    steps = 0
-    for ep in tqdm(range(episodes), desc="fresh geometry", leave=False):
+class _FreshRun:
+    """One fresh-geometry env and the times of its episodes (:func:`bench_fresh_geometry`)."""
+
+    def __init__(self, overrides: dict) -> None:
+        self.env = gym.make(ENV_ID, overrides=overrides)
+        self.steps = 0
+        for seed in (0, 1):  # compiles the kernels; then the timed episodes draw geometries not seen before
+            self._play(seed)
+        self.steps = self.redraws = 0
+        self.equilibria = self.env.unwrapped.core.equilibria
+        self.solves0, self.solve_s0 = self.equilibria.solves, self.equilibria.solve_wall_s
+        self.times: dict[str, list[float]] = {k: [] for k in ("reset_wall", "reset_cpu", "episode_wall",
+                                                               "episode_cpu", "release_wall")}
+        self.origins: set[str] = set()
+
+    def _play(self, seed: int) -> tuple[dict, dict, float]:
+        """Reset and the episode's steps: reset info (with the reset's wall and CPU time [s]), last step's info,
+        wall time of the last step [s]."""
         t, c = time.perf_counter(), time.process_time()
-        _, info = env.reset(seed=10_000 + ep)
-        reset_wall.append(time.perf_counter() - t)
-        reset_cpu.append(time.process_time() - c)
-        redraws += info["scenario_redraws"]
-        origins.add(info["statics"])
+        _, info = self.env.reset(seed=seed)
+        info = {**info, "reset_wall_s": time.perf_counter() - t, "reset_cpu_s": time.process_time() - c}
         for k in range(RELEASE_STEP + 1):
             tf = time.perf_counter()
-            _, _, terminated, truncated, step_info = env.step(_actions(np.array([k]))[0])
-            steps += 1
+            _, _, terminated, truncated, step_info = self.env.step(_actions(np.array([k]))[0])
+            self.steps += 1
             if terminated or truncated:
                 break
-        fall_wall.append(time.perf_counter() - tf)
-        episode_wall.append(time.perf_counter() - t)
-        episode_cpu.append(time.process_time() - c)
+        return info, step_info, time.perf_counter() - tf
+
+    def episode(self, seed: int) -> None:
+        """One timed episode, on an equilibrium solved afresh (the equilibria kept in memory are shared by every
+        env of the process, so another variant's episode on the same geometry would have left this one's)."""
+        self.equilibria.memory.clear()
+        t, c = time.perf_counter(), time.process_time()
+        info, step_info, release_wall = self._play(seed)
         assert step_info["sim_status"] == "touchdown", step_info["sim_status"]
-    solves = core.equilibria.solves - solves0
-    env.close()
+        self.redraws += info["scenario_redraws"]
+        self.origins.add(info["statics"])
+        self.times["release_wall"].append(release_wall)
+        self.times["episode_wall"].append(time.perf_counter() - t)
+        self.times["episode_cpu"].append(time.process_time() - c)
+        self.times["reset_wall"].append(info["reset_wall_s"])
+        self.times["reset_cpu"].append(info["reset_cpu_s"])
 
-    def stats(values: list[float]) -> dict[str, float]:
-        return {"min": min(values), "median": float(np.median(values)), "p90": float(np.percentile(values, 90)),
-                "max": max(values)}
+    def result(self) -> dict:
+        """Totals and the median and spread of every time."""
+        def stats(values: list[float]) -> dict[str, float]:
+            return {"min": min(values), "median": float(np.median(values)), "p90": float(np.percentile(values, 90)),
+                    "max": max(values)}
 
-    return {"env": "single", "num_envs": 1, "cores": 1, "episodes": episodes, "transitions": steps,
-            "wall_s": sum(episode_wall), "cpu_s": sum(episode_cpu), "statics": sorted(origins),
-            "solves": solves, "solve_wall_s_mean": (core.equilibria.solve_wall_s - solve_s0) / max(solves, 1),
-            "scenario_redraws": redraws, "reset_wall_s": stats(reset_wall), "reset_cpu_s": stats(reset_cpu),
-            "episode_wall_s": stats(episode_wall), "episode_cpu_s": stats(episode_cpu),
-            "release_step_wall_s": stats(fall_wall)}
+        solves = self.equilibria.solves - self.solves0
+        tm = self.times
+        self.env.close()
+        return {"env": "single", "num_envs": 1, "cores": 1, "episodes": len(tm["episode_wall"]),
+                "transitions": self.steps, "wall_s": sum(tm["episode_wall"]), "cpu_s": sum(tm["episode_cpu"]),
+                "statics": sorted(self.origins), "solves": solves,
+                "solve_wall_s_mean": (self.equilibria.solve_wall_s - self.solve_s0) / max(solves, 1),
+                "scenario_redraws": self.redraws, "reset_wall_s": stats(tm["reset_wall"]),
+                "reset_cpu_s": stats(tm["reset_cpu"]), "episode_wall_s": stats(tm["episode_wall"]),
+                "episode_cpu_s": stats(tm["episode_cpu"]), "release_step_wall_s": stats(tm["release_wall"])}
+
+
+def bench_fresh_geometry(episodes: int, variants: dict[str, dict]) -> dict[str, dict]:
+    """Single env, calm water, every episode on a new geometry drawn from the config's ranges (a new equilibrium
+    and compiled model at every reset): reset and whole-episode wall and CPU time, median and spread, for each
+    of ``variants`` (name: overrides), which play each geometry in turn (the machine's drift hits them alike)."""
+    runs = {name: _FreshRun(overrides) for name, overrides in variants.items()}
+    for ep in tqdm(range(episodes), desc="fresh geometry", leave=False):
+        for run in runs.values():
+            run.episode(10_000 + ep)
+    return {name: run.result() for name, run in runs.items()}
 
 
 def _run_vector(env, n: int, episodes_per_env: int, cpu_fn) -> dict:
@@ -340,10 +369,11 @@ def main(argv: list[str] | None = None) -> dict:
     load_before = os.getloadavg()[0]
     if args.variant == "fresh-geometry":
         result = load_result("bench_env")
-        for key, overrides in (("fresh_geometry", FRESH), ("fresh_geometry_growing", FRESH_GROWING)):
-            fresh = bench_fresh_geometry(4 if args.quick else args.fresh_episodes, overrides)
+        variants = {"fresh_geometry": FRESH, "fresh_geometry_growing": FRESH_GROWING}
+        runs = bench_fresh_geometry(4 if args.quick else args.fresh_episodes, variants)
+        for key, fresh in runs.items():
             result[key] = {**run_record(load_before), "python": platform.python_version(),
-                           "config": "anchor-release (default)", "overrides": overrides, **fresh}
+                           "config": "anchor-release (default)", "overrides": variants[key], **fresh}
         result["targets"] = {**result.get("targets", {}), "fresh_reset_wall_s_median": 0.020,
                              "fresh_episode_wall_s_median": 0.040}
         RESULTS.write_text(json.dumps(result, indent=2))

@@ -231,8 +231,8 @@ class DiscretizationConfig(_Strict):
     fall_step_growth_max: float = Field(
         1.0, ge=1.0, le=3.0, description="an implicit_euler fall lengthens its step up to this many times where the "
         "fastest node moves slower than the 40 m/s the step's accuracy cap assumes (the cap evaluated at the "
-        "fastest node's speed); faster, at a measured cost in accuracy (docs/fall-accuracy.md); 1: fixed steps; "
-        "the explicit integrators ignore it")
+        "fastest node's speed; it multiplies the step the fall is asked for, control.fall_dt_scale included); faster, "
+        "at a measured cost in accuracy (docs/fall-accuracy.md); 1: fixed steps; the explicit integrators ignore it")
     fit_to_geometry: bool = Field(
         True, description="fit a preset's tight_line resolution to the scene's release geometry when it is loaded; "
         "the envs set false and choose it themselves, at the reset and again for the fall at the release")

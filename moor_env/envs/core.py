@@ -372,7 +372,7 @@ def run_advance(core: InstallationCore, adv: Advance, chunk_s: float | None = No
 
     The integration goes through :func:`moor_env.envs.batch.advance_many` with one scene, the kernel the batched
     vector env uses, so that both give bit-identical episodes. Chunking never changes the result: the kernel
-    takes whole steps of dt from the same start time.
+    takes whole steps from the same start time, each as long as the state it starts from sets.
     """
     if core.advancer is None:
         core.advancer = BatchAdvancer()

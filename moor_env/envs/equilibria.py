@@ -70,9 +70,12 @@ def statics_scene_dict(scene_data: dict[str, Any], chain_material: str, nominal_
     materials = dict(scene_data["materials"])
     materials[chain_material] = {**materials[chain_material], "cd_tangential": nominal_chain_cd_t}
     data["materials"] = materials
-    if "discretization" in data:  # the fall's integrator: no part of the hanging state
-        data["discretization"] = {k: v for k, v in data["discretization"].items() if k != "fall_integrator"}
+    if "discretization" in data:  # the fall's own keys: no part of the hanging state
+        data["discretization"] = {k: v for k, v in data["discretization"].items() if k not in FALL_KEYS}
     return data
+
+
+FALL_KEYS = ("fall_integrator", "fall_step_growth_max")  # discretization keys that only the fall reads
 
 
 def scene_text(data: dict[str, Any]) -> str:

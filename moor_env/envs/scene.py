@@ -29,7 +29,7 @@ from moor_env.config import (
     tight_line_rule,
 )
 from moor_env.envs.config import EnvConfig
-from moor_env.envs.equilibria import plain_copy, scene_key, scene_text, statics_scene_dict
+from moor_env.envs.equilibria import FALL_KEYS, plain_copy, scene_key, scene_text, statics_scene_dict
 from moor_env.envs.resolution import TightLineRule, tight_line_keys_by_sea
 from moor_env.envs.scenario import representative_scenario
 from moor_env.errors import ConfigError
@@ -200,10 +200,11 @@ class SceneFactory:
                 "installation": InstallationConfig.model_validate(data["installation"]),
                 "materials": {**statics.materials, chain: MaterialConfig.model_validate(data["materials"][chain])},
             }
-            fall = data.get("discretization", {}).get("fall_integrator")
-            if fall is not None:  # left out of the statics scene (it does not change the equilibrium)
+            disc_data = data.get("discretization", {})
+            fall = {k: disc_data[k] for k in FALL_KEYS if disc_data.get(k) is not None}
+            if fall:  # left out of the statics scene (they do not change the equilibrium)
                 update["discretization"] = DiscretizationConfig.model_validate(
-                    {**statics.discretization.model_dump(), "fall_integrator": fall})
+                    {**statics.discretization.model_dump(), **fall})
             scene = statics.model_copy(update=update)
             check_scene_consistency(scene)
         except (ConfigError, ValidationError):
@@ -278,5 +279,5 @@ class SceneFactory:
         disc = DiscretizationConfig.model_validate({**statics.discretization.model_dump(), **keys})
         base = self.compiled(statics_key + json.dumps(keys, sort_keys=True),
                              statics.model_copy(update={"discretization": disc}))
-        disc = disc.model_copy(update={"fall_integrator": episode.discretization.fall_integrator})
+        disc = disc.model_copy(update={k: getattr(episode.discretization, k) for k in FALL_KEYS})
         return derive_model(base, episode.model_copy(update={"discretization": disc}))

@@ -26,8 +26,9 @@ segment snapping taut within a step is an inelastic event. Linearised (implicit)
   iteration on its spring: the turn would otherwise stretch it by about (h v_perp)^2 / (2 l0), which the next
   load evaluation reads as tension (24 MN on a 1 m chain segment turning at 15 m/s over 11.25 ms). Where that turn
   can be foreseen the solve it costs is saved: a taut segment whose start velocities turn it so far is linearised
-  at its predicted end chord d0 + h (v_b - v_a) from the first solve on, and a segment entering the set along the
-  direction the solve gave its end chord (``implicit_active_set.predict_turns``). Without the
+  along its predicted end chord d0 + h (v_b - v_a) from the first solve on (``implicit_active_set.predict_turns``),
+  and a segment entering the set along the direction the solve gave its end chord
+  (``implicit_active_set._enter_along_end_chord``). Without the
   end-of-step set, a segment going taut inside a step would be stretched explicitly and spring back elastically in
   the next one, and on a slack chain these snaps would run along it one segment per step and grow until the strain
   limit;

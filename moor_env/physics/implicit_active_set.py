@@ -54,8 +54,9 @@ def _flip(orow, s):
 
 @jit_step
 def chord_point(s, seg_chord, kq, l0):
-    """Length [m], unit tangent and transverse stiffness kt [N/m] of segment s at its re-linearisation point, the
-    end chord predicted by the previous solve (``seg_chord[s, :3]``): kt = T_e / length, T_e = kq (length - l0) its
+    """Length [m], unit tangent and transverse stiffness kt [N/m] of segment s at its re-linearisation point
+    (``seg_chord[s, :3]``: the end chord a solve predicted, or a predicted direction at a chosen length,
+    :func:`predict_turns`, :func:`_enter_along_end_chord`): kt = T_e / length, T_e = kq (length - l0) its
     elastic tension there (>= 0, so that the block stays positive semi-definite)."""
     dx = seg_chord[s, 0]
     dy = seg_chord[s, 1]
@@ -193,16 +194,18 @@ def _pass_active_set(h, model, state, orow, flip_exits):
     return entries, exits, turns
 
 
-
 @jit_no_refcount
 def predict_turns(h, state, orow):
-    """Linearise each taut segment that its start velocities turn within the step at its predicted end chord
-    p = d0 + h (v_b - v_a) instead of its start chord, where p is longer than the linear prediction by
-    ``TURN_TOLERANCE`` (strain): the first solve then holds it where a turn check after that solve would have
-    put it (:func:`_pass_active_set`), and the checks after every solve still correct a prediction that misses.
-    The segment may still leave the set. With the entering segments' direction (:func:`_enter_along_end_chord`)
-    it takes the solves per step of gjoa-500's fine fall from 2.69 to 2.32 and of its hanging in waves from 1.29
-    to 1.02 (``benchmarks/bench_implicit_step.py``)."""
+    """Linearise each taut segment that its start velocities turn within the step along its predicted end chord
+    p = d0 + h (v_b - v_a), at its present length |d0| (its present tension), instead of along its start chord,
+    where p is longer than the linear prediction by ``TURN_TOLERANCE`` (strain): the first solve then holds it
+    about where a turn check after that solve would have put it (:func:`_pass_active_set`), and the checks after
+    every solve still correct a prediction that misses. The segment may still leave the set. Not at p itself: a
+    turn's stretch there gives the spring the geometric stiffness of its elastic tension at |p| across the chain,
+    which holds a kicked node back (a 15 m/s kick on the hanging 1 m chain: 1.98 MN after one step against
+    1.49 MN in sub-steps). With the entering segments' direction (:func:`_enter_along_end_chord`) gjoa-500's fine
+    fall takes 2.32 solves per step (2.69 without either) and its hanging in waves 1.02 (1.29)
+    (``benchmarks/bench_implicit_step.py``)."""
     node_pos, node_vel, seg_i, seg_f, seg_chord = (state.node_pos, state.node_vel, state.seg_i, state.seg_f,
                                                    state.seg_chord)
     nn = orow.shape[0]

@@ -182,7 +182,8 @@ def _add_springs(h, model, state, orow):
 @jit_step
 def _add_chord_spring(s, h, tension, q0x, q0y, q0z, rx, ry, rz, node_pos, a, b, ea, eb, l0, mat_f, m, seg_chord,
                       node_mm, seg_gain):
-    """The axial spring-damper of active segment s linearised at its predicted end chord p (``seg_chord``): adds
+    """The axial spring-damper of active segment s linearised at the chord p of ``seg_chord`` (an end chord a solve
+    predicted, or a predicted direction at a chosen length, ``implicit_active_set``): adds
     its block h C + h^2 K at p to both ends' blocks and returns its right-hand side on node a (minus on b).
 
     With d1 = d0 + h (v_b - v_a + dv_b - dv_a) the end chord, the spring's force on a is linearised about p as

@@ -314,7 +314,8 @@ def speed_step_factor(node_i, node_vel, growth_max):
 
 @jit_step
 def advance(model, state, t, t_end, dt, integrator, detect_touchdown, hist_every, step_growth_max):
-    """Step from ``t`` until the step nearest ``t_end`` [s], touchdown of the anchor tip, or a blow-up.
+    """Step from ``t`` until ``t_end`` [s] (the first step that ends at or past ``t_end`` - dt / 2), touchdown of
+    the anchor tip, or a blow-up.
 
     Only whole steps of ``dt`` are taken, so the time reached is within dt/2 of ``t_end`` and a run split into
     several calls is bit-identical to one call. With ``step_growth_max`` > 1 (``implicit_euler`` only) each step
@@ -343,7 +344,8 @@ def advance(model, state, t, t_end, dt, integrator, detect_touchdown, hist_every
     n_steps = 0
     p0x = p0y = p0z = v0x = v0y = v0z = e0x = e0y = e0z = 0.0
     set_constrained_nodes(model, state, t)
-    # whole steps only, so that splitting a run into calls never changes the step sequence (determinism)
+    # whole steps only, each as long as the state it starts from sets, so that splitting a run into calls never
+    # changes the step sequence (determinism)
     h = dt
     grow = step_growth_max > 1.0 and integrator == INTEGRATOR_IMPLICIT_EULER
     # the topology is trusted only from the second step of a call on: between calls the caller may release,

@@ -80,7 +80,7 @@ WORK_FIELDS: tuple[Field, ...] = (
     Field("node_contact", F8, 1, ("nodes",)),  # seabed contact area [m^2]
     Field("node_acc", F8, 2, ("nodes", 3)),  # acceleration [m/s^2]; implicit step's right-hand sides
     Field("seg_tension", F8, 1, ("segs",)),  # [N]
-    Field("seg_chord", F8, 2, ("segs", 4)),  # implicit step: predicted end chord [m] of a re-linearised segment, flag
+    Field("seg_chord", F8, 2, ("segs", 4)),  # implicit step: chord [m] a segment's spring is linearised at, flag
     Field("seg_gain", F8, 2, ("segs", 5)),  # implicit step: each segment's block G_s of the solve (alpha, beta, q)
     Field("node_base", F8, 2, ("nodes", 9)),  # implicit step: blocks, right-hand sides less springs, contact
     Field("body_load", F8, 1, (6,)),  # force and moment on the anchor

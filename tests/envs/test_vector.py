@@ -36,10 +36,12 @@ COARSE = {"fidelity.discretization.integrator": "implicit_euler", "control.pre_r
 # the `fast` preset: coarse chain before the release, every tiny fall remeshed onto its tight_line chain
 REMESH = {"fidelity": {"fidelity": "fast", "discretization.fibre_segment_m": 20.0,
                        "discretization.wire_segment_m": 30.0}}
+# the same with the fall's step growing where the lines move slowly (the kernel's step-growth column)
+GROWING = {"fidelity": {**REMESH["fidelity"], "discretization.fall_step_growth_max": 3.0}}
 
 
 @pytest.mark.parametrize(("n", "threads", "extra"), [(3, 1, {}), (3, 2, {}), (10, 2, {}), (3, 2, COARSE),
-                                                     (3, 2, REMESH)])
+                                                     (3, 2, REMESH), (3, 2, GROWING)])
 def test_batched_rows_equal_single_envs(tiny, n, threads, extra):  # 10 on 2 threads: groups of 5 per kernel call
     steps = 40
     overrides = {**tiny, **extra}
@@ -52,6 +54,7 @@ def test_batched_rows_equal_single_envs(tiny, n, threads, extra):  # 10 on 2 thr
     obs_s, info_s = sync.reset(seed=21)
     assert np.array_equal(obs_b, obs_s)
     ended = remeshed = 0
+    growths = set()
     for act in _actions(n, steps, seed=4):
         out_b = batched.step(act)
         out_s = sync.step(act)
@@ -63,8 +66,10 @@ def test_batched_rows_equal_single_envs(tiny, n, threads, extra):  # 10 on 2 thr
             assert np.array_equal(batched_values, values), (term, batched_values - values)
         ended += int(np.sum(out_b[2] | out_b[3]))
         remeshed += sum(e.unwrapped.core.fall_resolution == "tight_line" for e in sync.envs)
+        growths |= {e.unwrapped.core.sim.step_growth_max for e in sync.envs}
     assert ended >= n  # autoresets happened on the way
-    assert (remeshed > 0) == (extra is REMESH)
+    assert (remeshed > 0) == (extra in (REMESH, GROWING))
+    assert max(growths) == (3.0 if extra is GROWING else 1.0)
     batched.close()
     sync.close()
 

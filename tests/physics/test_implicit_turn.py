@@ -67,9 +67,9 @@ def test_turning_segment_keeps_the_substepped_tension(v_perp_m_s):
 
 
 def test_only_a_turning_segment_is_linearised_again():
-    """The extra solve is paid only where a segment turns: at 0.5 m/s the turn strain over a step is
-    (h v)^2 / (2 l0^2) = 1.6e-5, below ``TURN_TOLERANCE`` (1e-4), and no segment is linearised again; at 10 m/s
-    (6.3e-3) both segments beside the kicked node are, and no other."""
+    """Only a segment that turns is linearised again: at 0.5 m/s the turn strain over a step is
+    (h v)^2 / (2 l0^2) = 1.6e-5, below ``TURN_TOLERANCE`` (1e-4), and no segment is; at 10 m/s (6.3e-3) both
+    segments beside the kicked node are, and no other."""
     _, sim = _kicked_step(0.5, 1)
     assert not np.any(sim.work.seg_chord[:, 3])
     _, sim = _kicked_step(10.0, 1)
@@ -114,26 +114,55 @@ def test_a_foreseen_turn_is_linearised_from_the_first_solve():
         np.testing.assert_allclose(chords[s, :3], expected, rtol=0, atol=1e-12)
 
 
+L0_M = 2.0  # the hanging pendulum segment of the two tests below
+
+
+def _pendulum(lower_z_m: float, vel_x_m_s: float, dv_m_s: tuple, taut: bool) -> tuple:
+    """A segment of ``L0_M`` hanging from a held node, its lower node at ``lower_z_m`` moving sideways at
+    ``vel_x_m_s`` and given the solved velocity change ``dv_m_s``; in the active set where ``taut``. Returns the
+    records and the ordering scratch ``update_active_set`` reads."""
+    node_pos = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, lower_z_m]])
+    node_vel = np.array([[0.0, 0.0, 0.0], [vel_x_m_s, 0.0, 0.0]])
+    seg_i = np.zeros((1, L.N_SEG_I), np.int64)
+    seg_i[0, [L.SI_A, L.SI_B, L.SI_ACTIVE]] = 0, 1, 1
+    seg_f = np.zeros((1, L.N_SEG_F))
+    seg_f[0, L.SF_L0] = L0_M
+    mat_f = np.zeros((1, L.N_MAT_F))
+    mat_f[0, L.MF_EA], mat_f[0, L.MF_MASS], mat_f[0, L.MF_ZETA] = 1e9, 400.0, 0.3
+    node_acc = np.array([[0.0, 0.0, 0.0], dv_m_s])
+    orow = np.zeros((2, 3), np.int64)
+    orow[:, T.OR_EFF] = -1, 1
+    orow[0, T.OR_FLAGS] = int(taut)
+    model = _record(ModelRecord, mat_f=mat_f)
+    state = _record(StateRecord, node_pos=node_pos, node_vel=node_vel, seg_i=seg_i, seg_f=seg_f, node_acc=node_acc,
+                    seg_chord=np.zeros((1, 4)))
+    return model, state, orow
+
+
 def test_an_entering_segment_is_linearised_along_its_solved_direction():
     """A slack segment that the solve carries taut and turns (its end chord beyond its linear prediction by more
     than ``TURN_TOLERANCE``) enters the set linearised at its unstretched length along that chord, not at the
     chord itself (which the solve, without its spring, overstretched)."""
-    node_pos = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -0.999]])
-    node_vel = np.array([[0.0, 0.0, 0.0], [2.0, 0.0, 0.0]])  # the lower node swings sideways at 2 m/s
-    seg_i = np.zeros((1, L.N_SEG_I), np.int64)
-    seg_i[0, [L.SI_A, L.SI_B, L.SI_ACTIVE]] = 0, 1, 1
-    seg_f = np.ones((1, L.N_SEG_F))
-    mat_f = np.zeros((1, L.N_MAT_F))
-    mat_f[0, L.MF_EA], mat_f[0, L.MF_MASS], mat_f[0, L.MF_ZETA] = 1e9, 400.0, 0.3
-    node_acc = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -0.1]])  # the solve moves it down 0.1 m/s more
-    orow = np.zeros((2, 3), np.int64)
-    orow[:, T.OR_EFF] = -1, 1
-    model = _record(ModelRecord, mat_f=mat_f)
-    state = _record(StateRecord, node_pos=node_pos, node_vel=node_vel, seg_i=seg_i, seg_f=seg_f, node_acc=node_acc,
-                    seg_chord=np.zeros((1, 4)))
     h = 0.1
+    # the lower node swings sideways at 2 m/s; the solve moves it down 0.1 m/s more
+    model, state, orow = _pendulum(-0.999 * L0_M, 2.0, (0.0, 0.0, -0.1), taut=False)
     assert S.update_active_set(h, model, state, orow) == 1
     assert S.is_active(orow, 0) == 1
-    end_chord = node_pos[1] - node_pos[0] + h * (node_vel[1] + node_acc[1])
+    end_chord = state.node_pos[1] - state.node_pos[0] + h * (state.node_vel[1] + state.node_acc[1])
     assert state.seg_chord[0, 3] == 1.0
-    np.testing.assert_allclose(state.seg_chord[0, :3], end_chord / np.linalg.norm(end_chord), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(state.seg_chord[0, :3], L0_M * end_chord / np.linalg.norm(end_chord), rtol=0,
+                               atol=1e-15)
+
+
+def test_a_turn_that_only_the_solve_shows_is_linearised_again():
+    """A taut segment at rest (nothing for ``predict_turns`` to foresee) that the solve swings sideways at 2 m/s
+    over 0.1 s (turn strain (h v)^2 / (2 l0^2) = 5e-3) is linearised again at the end chord the solve predicts and
+    solved again."""
+    h = 0.1
+    model, state, orow = _pendulum(-1.0001 * L0_M, 0.0, (2.0, 0.0, 0.0), taut=True)
+    S.predict_turns(h, state, orow)
+    assert state.seg_chord[0, 3] == 0.0
+    assert S.update_active_set(h, model, state, orow) == 1
+    end_chord = state.node_pos[1] - state.node_pos[0] + h * (state.node_vel[1] + state.node_acc[1])
+    assert state.seg_chord[0, 3] == 1.0
+    np.testing.assert_allclose(state.seg_chord[0, :3], end_chord, rtol=0, atol=1e-15)
