@@ -6,6 +6,7 @@ import functools
 import json
 import subprocess
 import sys
+import threading
 
 import numpy as np
 import pytest
@@ -134,6 +135,22 @@ def test_line_past_back_end_measures_along_and_off_the_anchor_axis():
     node = st.seg_i[st.line_i[chain, L.LI_SEG_START] + 2, L.SI_B]  # third node up the chain
     st.node_pos[node] = back + 0.4 * axis + 0.3 * normal
     assert sim.line_past_back_end_m("vertical_chain") == pytest.approx((0.4, 0.3), abs=1e-9)
+
+
+def test_a_fall_cut_short_ends_where_the_kernel_stops():
+    """A fall whose time limit is no whole number of steps (0.5 s at the fast preset's 22.5 ms: the kernel stops at
+    0.495 s, the first step that ends within half a step of the limit) ends there with the time-limit status,
+    rather than asking the kernel again for a step it never takes."""
+    out = []
+    run = threading.Thread(target=lambda: out.append(simulate_drop(
+        "gjoa-500", {"fidelity": "fast", "simulation.max_fall_time_s": 0.5}, history=False)), daemon=True)
+    run.start()
+    run.join(120.0)
+    assert out, "the drop did not end"
+    result = out[0]
+    assert result.status == "no touchdown within max_fall_time_s"
+    assert result.dt_s == pytest.approx(0.0225)
+    assert result.n_steps == 22
 
 
 def test_fall_integrator_takes_over_at_the_release():
