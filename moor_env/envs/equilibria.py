@@ -52,6 +52,9 @@ def plain_copy(data: Any) -> Any:
     return data
 
 
+FALL_KEYS = ("fall_integrator", "fall_step_growth_max")  # discretization keys that only the fall reads
+
+
 def statics_scene_dict(scene_data: dict[str, Any], chain_material: str, nominal_chain_cd_t: float) -> dict[str, Any]:
     """The scene mapping the equilibrium is solved for: sea state calm, no pre-release rates, nominal Cd_t, no
     fall integrator.
@@ -73,9 +76,6 @@ def statics_scene_dict(scene_data: dict[str, Any], chain_material: str, nominal_
     if "discretization" in data:  # the fall's own keys: no part of the hanging state
         data["discretization"] = {k: v for k, v in data["discretization"].items() if k not in FALL_KEYS}
     return data
-
-
-FALL_KEYS = ("fall_integrator", "fall_step_growth_max")  # discretization keys that only the fall reads
 
 
 def scene_text(data: dict[str, Any]) -> str:
