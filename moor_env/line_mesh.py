@@ -86,31 +86,62 @@ def _points_at_arclength(points: np.ndarray, fractions: np.ndarray) -> np.ndarra
 
 def hanging_curve(start, end, length: float, seabed_z: float, n: int = 400) -> np.ndarray:
     """A first-guess hanging shape of given length between two points: the chord plus a parabolic sag,
-    sized by bisection so that its arc length is ``length``, clipped at the seabed.
+    sized so that its arc length is ``length`` (within ``SAG_TOLERANCE`` of it), clipped at the seabed.
+
+    The sag is found by the Illinois variant of regula falsi on a bracket: the arc length grows monotonically with
+    the sag, and the search takes about ten evaluations where bisection to the same precision takes fifty.
     """
     start = np.asarray(start, float)
     end = np.asarray(end, float)
     u = np.linspace(0.0, 1.0, n)
     chord = start[None, :] + u[:, None] * (end - start)[None, :]
+    bulge = 4.0 * u * (1.0 - u)
 
     def curve(sag: float) -> np.ndarray:
         pts = chord.copy()
-        pts[:, 2] -= sag * 4.0 * u * (1.0 - u)
-        pts[:, 2] = np.maximum(pts[:, 2], seabed_z)
+        pts[:, 2] = np.maximum(chord[:, 2] - sag * bulge, seabed_z)
         return pts
 
-    def arclength(sag: float) -> float:
-        return float(np.sum(np.linalg.norm(np.diff(curve(sag), axis=0), axis=1)))
+    def excess(sag: float) -> float:
+        steps = np.diff(curve(sag), axis=0)
+        return float(np.sum(np.sqrt(np.einsum("ij,ij->i", steps, steps)))) - length
 
-    if arclength(0.0) >= length:
+    f_lo = excess(0.0)
+    if f_lo >= 0.0:
         return curve(0.0)
     lo, hi = 0.0, max(length, 1.0)
-    while arclength(hi) < length and hi < 1e7:
-        hi *= 2.0
-    for _ in range(80):
-        mid = 0.5 * (lo + hi)
-        if arclength(mid) < length:
-            lo = mid
+    f_hi = excess(hi)
+    while f_hi < 0.0 and hi < 1e7:
+        lo, f_lo, hi = hi, f_hi, 2.0 * hi
+        f_hi = excess(hi)
+    return curve(_illinois(excess, lo, f_lo, hi, f_hi, SAG_TOLERANCE * max(length, 1.0)))
+
+
+SAG_TOLERANCE = 1e-12  # of the line length: the arc length's error where the sag search stops
+
+
+def _illinois(f, lo: float, f_lo: float, hi: float, f_hi: float, tol: float, max_evaluations: int = 200) -> float:
+    """A root of the increasing function ``f`` within the bracket [lo, hi] (f_lo < 0 <= f_hi) by the Illinois
+    method; stops where |f| <= ``tol`` or the bracket has closed to rounding."""
+    side = 0
+    x = hi
+    for _ in range(max_evaluations):
+        if f_hi <= tol or hi - lo <= 1e-15 * hi:
+            return hi if f_hi <= -f_lo else lo
+        x = hi - f_hi * (hi - lo) / (f_hi - f_lo)
+        if not lo < x < hi:
+            x = 0.5 * (lo + hi)
+        fx = f(x)
+        if abs(fx) <= tol:
+            return x
+        if fx < 0.0:
+            lo, f_lo = x, fx
+            if side == -1:
+                f_hi *= 0.5
+            side = -1
         else:
-            hi = mid
-    return curve(0.5 * (lo + hi))
+            hi, f_hi = x, fx
+            if side == 1:
+                f_lo *= 0.5
+            side = 1
+    return x
