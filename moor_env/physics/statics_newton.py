@@ -142,13 +142,13 @@ def _apply(scale, nq, body_node, basis, dq, model, state, axis0, saved, tree, or
 
 
 @jit_step
-def _bounded_step(tau, ctl, nq, body_node, basis, res_body, dq, model, state, scratch, tree, orow, seg_age):
+def _bounded_step(tau, ctl, nq, body_node, basis, res_body, dq, model, state, scratch, tree, orow, seg_age, moved):
     """The step at the present state with pseudo time step tau, cut tenfold while the step is longer than
-    ``OVERSIZE`` step limits; returns (tau, step size)."""
+    ``OVERSIZE`` step limits; returns (tau, step size). ``moved``: the nodes moved since the last solve."""
     size = math.inf
-    for _ in range(8):
+    for k in range(8):
         ctl[C_SOLVES] += solve_step(1.0 / (tau * tau), nq, body_node, basis, res_body, dq, model, state, scratch,
-                                    tree, orow, seg_age, ctl[C_SEABED_RELEASE] != 0.0)
+                                    tree, orow, seg_age, ctl[C_SEABED_RELEASE] != 0.0, moved and k == 0)
         size = step_size(body_node, model, state, dq)
         if size <= OVERSIZE * ctl[C_MAX_STEP]:
             break
@@ -203,7 +203,8 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
     tau_max = ctl[C_TAU_MAX] if ctl[C_TAU_MAX] > 0.0 else TAU_MAX_S
     status = STATUS_RUNNING
     norm2, worst = residual(model, state, body_node, basis, res_body)
-    tau, size = _bounded_step(tau, ctl, nq, body_node, basis, res_body, dq, model, state, scratch, tree, orow, seg_age)
+    tau, size = _bounded_step(tau, ctl, nq, body_node, basis, res_body, dq, model, state, scratch, tree, orow, seg_age,
+                              True)
     step_contact = contact and scratch[6].any()  # the step's solve predicted a node inside the anchor
     saved_contact = step_contact
     cap = ctl[C_CAP] if ctl[C_CAP] > 0.0 else ctl[C_MAX_STEP]
@@ -238,7 +239,7 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
         new_tau = tau
         if new2 == new2:
             new_tau, new_size = _bounded_step(tau, ctl, nq, body_node, basis, res_body, dq, model, state, scratch,
-                                              tree, orow, seg_age)
+                                              tree, orow, seg_age, True)
         shrink = 1.0 - SHRINK * scale
         if (new_worst <= RESIDUAL_JUMP * max(worst, tol)
                 and (new_size <= shrink * size or (new2 <= shrink * shrink * norm2 and new_size <= GROWTH * size)
@@ -254,7 +255,7 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
                 tau = min(tau * 4.0, tau_max)
                 if tau <= TAU_NEWTON_S:  # the step changes with tau: the next test compares steps of one tau
                     tau, size = _bounded_step(tau, ctl, nq, body_node, basis, res_body, dq, model, state, scratch,
-                                              tree, orow, seg_age)
+                                              tree, orow, seg_age, False)
                     step_contact = contact and scratch[6].any()
             else:
                 tau = new_tau
@@ -277,7 +278,7 @@ def newton_statics(ctl, max_iter, body_node, model, state, seg_age):
             cuts = 0
             cap = ctl[C_MAX_STEP]
             tau, size = _bounded_step(0.1 * tau, ctl, nq, body_node, basis, res_body, dq, model, state, scratch,
-                                              tree, orow, seg_age)
+                                              tree, orow, seg_age, True)
             step_contact = contact and scratch[6].any()
     ctl[C_TAU] = tau
     ctl[C_CAP] = cap

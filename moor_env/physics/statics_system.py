@@ -37,11 +37,19 @@ import numpy as np
 
 from moor_env.physics import layout as L
 from moor_env.physics._jit import jit_no_refcount, jit_step
-from moor_env.physics.environment import current_velocity_along
-from moor_env.physics.hydro import slender_drag_turn
-from moor_env.physics.line import half_segment_morison, segment_axis, smoothed_tension_slope_n
+from moor_env.physics.line import segment_axis
 from moor_env.physics.loads import compute_loads, set_constrained_nodes
-from moor_env.physics.seabed import seabed_stiffness_n_m
+from moor_env.physics.statics_assembly import (
+    SEABED_BACK,
+    SEABED_DOWN,
+    SEABED_LEFT,
+    SEABED_UP,
+    assemble_diagonal,
+    assemble_lines,
+    hold_contact_couplings,
+    new_lines_k,
+    release_contact_couplings,
+)
 from moor_env.physics.statics_contact import (
     N_GEO,
     add_contact_blocks,
@@ -52,13 +60,7 @@ from moor_env.physics.statics_contact import (
 from moor_env.physics.statics_elimination import eliminate
 from moor_env.physics.tree import OR_EFF
 
-SLACK_STIFFNESS = 1e-6  # least stiffness of a segment in K, as a fraction of EA / l0 (keeps K regular)
 SLACK_PATIENCE = 3  # iterations a segment is slack before K lets it go
-# a node's place in a step's seabed set (``node_down``): held on the seabed at and above SEABED_DOWN
-SEABED_UP = 0
-SEABED_DOWN = 1
-SEABED_BACK = 2  # held again after leaving in this step: it stays
-SEABED_LEFT = -1  # left in this step
 ACTIVE_SET_ROUNDS = 8  # solves per step at most while the predicted seabed and line-anchor contacts change
 
 
@@ -124,111 +126,6 @@ def residual(model, state, body_node, basis, res_body):
     return norm2, worst
 
 
-@jit_no_refcount(inline="always")
-def _add_block(dmat, n, sign, m):
-    """dmat[n] += sign * m (3x3)."""
-    for i in range(3):
-        for j in range(3):
-            dmat[n, i, j] += sign * m[i, j]
-
-
-@jit_no_refcount
-def _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling, orow, kmat):
-    """Diagonal blocks D / tau^2 + K (``dmat``), the couplings of every segment's two ends (``coupling[s, 0]`` =
-    K_ab, ``coupling[s, 1]`` = K_ba) and the right-hand side F + G (``state.node_acc``); ``taut``: segments that K
-    holds taut, ``node_down``: nodes on the seabed at the end of the step (``SEABED_DOWN`` and up), ``kmat``: a
-    3x3 scratch block."""
-    node_pos = state.node_pos
-    seg_i = state.seg_i
-    seg_f = state.seg_f
-    node_force = state.node_force
-    node_contact = state.node_contact
-    seg_tension = state.seg_tension
-    rhs = state.node_acc
-    mat_f = model.mat_f
-    env_f = model.env_f
-    nn = node_pos.shape[0]
-    dmat[:, :, :] = 0.0
-    for n in range(nn):
-        if orow[n, OR_EFF] == n and n != body_node:
-            m = max(state.node_mass[n], 1e-6) * inv_tau2
-            for c in range(3):
-                dmat[n, c, c] = m
-                rhs[n, c] = node_force[n, c]
-    if body_node >= 0:
-        for c in range(3):
-            rhs[body_node, c] = 0.0  # the anchor's own residual enters at the root
-    seabed = -env_f[L.EF_DEPTH]
-    for n in range(nn):
-        e = orow[n, OR_EFF]
-        if e < 0 or e == body_node or node_contact[n] <= 0.0:
-            continue
-        k = seabed_stiffness_n_m(node_contact[n], env_f)
-        penetration = seabed - node_pos[n, 2]
-        if node_down[n] >= SEABED_DOWN:
-            dmat[e, 2, 2] += k
-            if penetration < 0.0:
-                rhs[e, 2] += k * penetration  # the gap to close before the seabed holds the node
-        elif penetration > 0.0:
-            rhs[e, 2] -= k * penetration  # lifts off: the seabed lets go
-    smoothing = env_f[L.EF_SLACK_SMOOTHING]
-    rho = env_f[L.EF_RHO]
-    current = env_f[L.EF_CUR_SCALE] != 0.0
-    profile = model.current_profile
-    last_node = -1  # the end b of the last segment whose drag turned, and the current velocity there
-    last_u = (0.0, 0.0, 0.0)
-    for s in range(seg_i.shape[0]):
-        a = seg_i[s, L.SI_A]
-        b = seg_i[s, L.SI_B]
-        ea = orow[a, OR_EFF]
-        eb = orow[b, OR_EFF]
-        if seg_i[s, L.SI_ACTIVE] == 0 or ea == eb:
-            coupling[s, :, :, :] = 0.0
-            continue
-        mat = seg_i[s, L.SI_MAT]
-        ea_n = mat_f[mat, L.MF_EA]
-        l0 = seg_f[s, L.SF_L0]
-        length, qx, qy, qz = segment_axis(node_pos, a, b)
-        q = (qx, qy, qz)
-        strain = (length - l0) / l0
-        floor = SLACK_STIFFNESS * ea_n / l0
-        kt = seg_tension[s] / length if length > 0.0 else 0.0
-        if strain <= 0.0 and taut[s] == 1:
-            kq = ea_n / l0  # slack for a step or two only: K keeps it taut
-        else:  # the smoothed tension-only law's slope
-            kq = max(smoothed_tension_slope_n(ea_n, strain, smoothing) / l0, floor)
-            if taut[s] == 0:
-                kt = max(kt, floor)
-        for i in range(3):
-            for j in range(3):
-                k = (kq - kt) * q[i] * q[j] + (kt if i == j else 0.0)
-                if ea >= 0:
-                    dmat[ea, i, j] += k
-                if eb >= 0:
-                    dmat[eb, i, j] += k
-                coupling[s, 0, i, j] = -k
-                coupling[s, 1, i, j] = -k
-        # current drag turns with the segment: d f_end / d x_b = D_end P / length, d / d x_a = -D_end P / length
-        if not current or length <= 0.0:
-            continue
-        cn, ct, _, _ = half_segment_morison(mat_f, mat, l0, rho)
-        for end in range(2):
-            node = a if end == 0 else b
-            ux, uy, uz = current_velocity_along(node, last_node, last_u, node_pos[node, 2], env_f, profile)
-            if end == 1:
-                last_node, last_u = node, (ux, uy, uz)
-            slender_drag_turn(ux, uy, uz, qx, qy, qz, cn / length, ct / length, kmat)
-            # K = -dF/dx: this end's row gets +D P / l from x_a and -D P / l from x_b
-            if end == 0:
-                if ea >= 0:
-                    _add_block(dmat, ea, 1.0, kmat)
-                _add_block(coupling[s], 0, -1.0, kmat)
-            else:
-                if eb >= 0:
-                    _add_block(dmat, eb, -1.0, kmat)
-                _add_block(coupling[s], 1, 1.0, kmat)
-
-
 @jit_no_refcount
 def _predict_seabed(body_node, state, seabed, node_down, orow, release):
     """Update the nodes predicted on the seabed after the step in ``state.node_acc`` (``node_down``, ``SEABED_*``
@@ -271,25 +168,34 @@ def _start_sets(model, state, seg_age, taut, node_down):
 
 @jit_step
 def solve_step(inv_tau2, nq, body_node, basis, res_body, dq, model, state, scratch, tree, orow, seg_age,
-               release_later):
+               release_later, moved):
     """The step at the present state (its loads evaluated) into ``state.node_acc`` (free nodes) and ``dq`` (the
     anchor), solved again while the contacts it predicts change (``release_later``: a node the seabed set took in
     may leave it again after the first solve, module docstring), and once more where, with the contacts settled,
     line-anchor contacts that would pull leave the set (``statics_contact.release_pulling``); at most
-    ``ACTIVE_SET_ROUNDS`` solves, their number returned. ``scratch``: the arrays of :func:`new_scratch`."""
-    dmat, coupling, taut, node_down, geo, cand, cin, bmat, cmat, coupled, body_a, body_r, blocks = scratch
+    ``ACTIVE_SET_ROUNDS`` solves, their number returned. ``scratch``: the arrays of :func:`new_scratch`.
+
+    ``moved``: the nodes moved since the last call with this scratch. The lines' part of K is assembled once per
+    state and set of taut segments (``statics_assembly``): the solves of one step, and a step solved again at
+    another pseudo time step, differ only in the diagonal and the contacts."""
+    dmat, coupling, taut, node_down, geo, cand, cin, bmat, cmat, coupled, body_a, body_r, blocks = scratch[:13]
+    lines_k = scratch[13:]
     seabed = -model.env_f[L.EF_DEPTH]
     _start_sets(model, state, seg_age, taut, node_down)
     contact = (body_node >= 0 and model.contact_f[L.CF_ON] != 0.0
                and contact_geometry(basis, model, state, geo, cand, cin) > 0)
+    assemble_lines(moved, model, state, taut, coupling, orow, blocks[0], lines_k)
     solves = 0
     released = False
     while True:
-        _assemble(inv_tau2, body_node, model, state, taut, node_down, dmat, coupling, orow, blocks[0])
+        assemble_diagonal(inv_tau2, body_node, model, state, node_down, dmat, orow, lines_k)
+        held = 0
         if contact:
+            held = hold_contact_couplings(state.node_pos.shape[0], cand, cin, coupling, lines_k)
             add_contact_blocks(model, state, geo, cand, cin, dmat, coupling, bmat, cmat, coupled, body_a, body_r)
         eliminate(inv_tau2, nq, body_node, basis, res_body, dq, model, state, dmat, coupling, tree, orow, contact,
                   bmat, cmat, coupled, body_a, body_r, blocks)
+        release_contact_couplings(coupling, lines_k, held)
         solves += 1
         if solves >= ACTIVE_SET_ROUNDS:
             return solves
@@ -342,8 +248,10 @@ def new_scratch(n_nodes, n_segs):
     seabed after the step; the line-anchor contact's (``physics/statics_contact.py``): candidates' geometry,
     candidates, candidates inside after the step (a row per node, then one per segment), node-anchor and
     anchor-node couplings, coupled nodes, the anchor's block and right-hand side; small blocks (4, 3, 3): the
-    assembly's 3x3 block, the elimination's inverse and product, and its two 3-vectors in the last."""
+    assembly's 3x3 block, the elimination's inverse and product, and its two 3-vectors in the last; then the
+    lines' part of K kept for the next solve at the same state (``statics_assembly.new_lines_k``)."""
     return (np.zeros((n_nodes, 3, 3)), np.zeros((n_segs, 2, 3, 3)), np.zeros(n_segs, np.int64),
             np.zeros(n_nodes, np.int64), np.zeros((n_nodes + n_segs, N_GEO)), np.zeros(n_nodes + n_segs, np.int64),
             np.zeros(n_nodes + n_segs, np.int64), np.zeros((n_nodes, 3, 5)), np.zeros((n_nodes, 5, 3)),
-            np.zeros(n_nodes, np.int64), np.zeros((5, 5)), np.zeros(5), np.zeros((4, 3, 3)))
+            np.zeros(n_nodes, np.int64), np.zeros((5, 5)), np.zeros(5), np.zeros((4, 3, 3))) + new_lines_k(n_nodes,
+                                                                                                            n_segs)

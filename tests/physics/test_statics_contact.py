@@ -111,6 +111,7 @@ def test_newton_step_predicts_the_residual_change(segments, turning):
     moves, at e of 2 mm); with the turning of the segment's normal round the axis in the system (``CF_TURNING``,
     as a creeping stage takes it) within the same bound."""
     from moor_env.physics import statics_system as system
+    from moor_env.physics.statics_assembly import assemble_diagonal, assemble_lines
     from moor_env.physics.statics_contact import add_contact_blocks, contact_geometry, slide_plan
     from moor_env.physics.statics_newton import _apply
     from moor_env.physics.statics_stages import body_root, slack_counts
@@ -140,15 +141,16 @@ def test_newton_step_predicts_the_residual_change(segments, turning):
         return state.node_force[free].copy()
 
     f0 = line_loads()
-    (dmat, coupling, taut, node_down, geo, cand, cin, bmat, cmat, coupled, body_a, body_r,
-     blocks) = system.new_scratch(nn, ns)
+    scratch = system.new_scratch(nn, ns)
+    dmat, coupling, taut, node_down, geo, cand, cin, bmat, cmat, coupled, body_a, body_r, blocks = scratch[:13]
     seg = sim.state.seg_i
     length = np.linalg.norm(sim.state.node_pos[seg[:, L.SI_B]] - sim.state.node_pos[seg[:, L.SI_A]], axis=1)
     taut[:] = (length > sim.state.seg_f[:, L.SF_L0]) | (slack_counts(sim.state, False) < system.SLACK_PATIENCE)
     node_down[:] = sim.state.node_pos[:, 2] <= -sim.env_f[L.EF_DEPTH]
     assert contact_geometry(basis, model, state, geo, cand, cin) > 0 and cin[row] == 1
     model.contact_f[L.CF_TURNING] = 1.0 if turning else 0.0
-    system._assemble(1e-24, body, model, state, taut, node_down, dmat, coupling, orow, blocks[0])
+    assemble_lines(True, model, state, taut, coupling, orow, blocks[0], scratch[13:])
+    assemble_diagonal(1e-24, body, model, state, node_down, dmat, orow, scratch[13:])
     add_contact_blocks(model, state, geo, cand, cin, dmat, coupling, bmat, cmat, coupled, body_a, body_r)
     system.eliminate(1e-24, nq, body, basis, res_body, dq, model, state, dmat, coupling, tree, orow, True, bmat,
                      cmat, coupled, body_a, body_r, blocks)
