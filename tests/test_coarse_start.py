@@ -14,7 +14,7 @@ from moor_env.compile import compile_scene
 from moor_env.errors import NoEquilibrium
 from moor_env.fidelity import fidelity_presets
 from moor_env.physics import layout as L
-from tests.test_simulation import ONE_COARSE_FIBRE_NODE
+from tests.test_simulation_starts import ONE_COARSE_FIBRE_NODE
 
 # the fast preset fitted to this scene makes the loop chain finer than the preset's own (0.5 m against 2 m) and the
 # fibre rope and the wire coarser (50 m and 100 m against 20 m and 30 m)
@@ -48,8 +48,8 @@ def test_no_coarse_compile_for_lines_no_finer_than_the_preset():
 FIBRE_ON_THE_SEABED = {"mooring_line_length_m": 750.0, "vessel_spacing_m": 60.0, "current_scale": 0.0}
 FAST_UNFITTED = {"fidelity": "fast", "discretization.fit_to_geometry": False}  # no line finer than the fast preset's
 
-# The statics benchmark's scene 423 (tests/test_simulation.py): it converges with the fibre rope a few centimetres
-# clear of the seabed, and its first guess lays the loop's chain on the seabed.
+# The statics benchmark's scene 423 (tests/test_simulation_starts.py): it converges with the fibre rope a few
+# centimetres clear of the seabed, and its first guess lays the loop's chain on the seabed.
 FIBRE_CLEAR_WITH_THE_CHAIN_ON_THE_SEABED = ONE_COARSE_FIBRE_NODE
 
 
@@ -142,7 +142,8 @@ def test_probe_is_not_solved_where_the_fibre_material_is_another_lines_too(monke
 
 
 def test_chain_the_seabed_bears_keeps_a_clear_fibre_from_being_refused(monkeypatch):
-    """Reference: the scene converges with the fibre rope clear of the seabed (tests/test_simulation.py, scene 423).
+    """Reference: the scene converges with the fibre rope clear of the seabed (scene 423 of
+    tests/test_simulation_starts.py).
     Its coarse equilibrium with the seabed bearing no fibre does not dip the fibre through the seabed; with the
     seabed bearing nothing of any line, the loop's chain sinks through it and takes the fibre along, which would
     refuse the scene."""
