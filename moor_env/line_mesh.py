@@ -114,6 +114,8 @@ def hanging_curve(start, end, length: float, seabed_z: float, n: int = 400) -> n
     while f_hi < 0.0 and hi < 1e7:
         lo, f_lo, hi = hi, f_hi, 2.0 * hi
         f_hi = excess(hi)
+    if f_hi < 0.0:  # the seabed holds the middle: no sag reaches the length, the deepest shape is the guess
+        return curve(hi)
     return curve(_illinois(excess, lo, f_lo, hi, f_hi, SAG_TOLERANCE * max(length, 1.0)))
 
 
@@ -122,26 +124,27 @@ SAG_TOLERANCE = 1e-12  # of the line length: the arc length's error where the sa
 
 def _illinois(f, lo: float, f_lo: float, hi: float, f_hi: float, tol: float, max_evaluations: int = 200) -> float:
     """A root of the increasing function ``f`` within the bracket [lo, hi] (f_lo < 0 <= f_hi) by the Illinois
-    method; stops where |f| <= ``tol`` or the bracket has closed to rounding."""
+    method: regula falsi whose end that stays put has its weight halved. Stops where |f| <= ``tol`` or the bracket
+    has closed to rounding, and returns the end with the smaller |f| (the ends' own values, not their weights)."""
+    w_lo, w_hi = f_lo, f_hi  # the interpolation weights; f_lo and f_hi stay the function's values
     side = 0
-    x = hi
     for _ in range(max_evaluations):
-        if f_hi <= tol or hi - lo <= 1e-15 * hi:
-            return hi if f_hi <= -f_lo else lo
-        x = hi - f_hi * (hi - lo) / (f_hi - f_lo)
+        if hi - lo <= 1e-15 * hi:
+            break
+        x = hi - w_hi * (hi - lo) / (w_hi - w_lo)
         if not lo < x < hi:
             x = 0.5 * (lo + hi)
         fx = f(x)
         if abs(fx) <= tol:
             return x
         if fx < 0.0:
-            lo, f_lo = x, fx
+            lo, f_lo, w_lo = x, fx, fx
             if side == -1:
-                f_hi *= 0.5
+                w_hi *= 0.5
             side = -1
         else:
-            hi, f_hi = x, fx
+            hi, f_hi, w_hi = x, fx, fx
             if side == 1:
-                f_lo *= 0.5
+                w_lo *= 0.5
             side = 1
-    return x
+    return hi if f_hi <= -f_lo else lo

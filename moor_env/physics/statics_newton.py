@@ -13,18 +13,18 @@ taken shorter; after ``LINE_SEARCH_CUTS`` cuts the pseudo time step tau is cut t
 is kept grows tau fourfold (switched evolution relaxation), so that the iteration becomes Newton's method near the
 solution; while tau <= ``TAU_NEWTON_S`` the step is solved again at the grown tau. A step carried past it was solved
 at tau >= 640 s (from the start's 10 s), where D / tau^2 is below 2.5e-3 N/m per tonne of a node's mass and about
-0.3 N/m on the anchor, a hundredth or less of the least stiffness K keeps on a slack segment (``SLACK_STIFFNESS`` EA
-/ l0: 20-75 N/m on the polyester), so that the step hardly changes with tau. A step longer than
-``OVERSIZE`` step limits cuts tau at once (K nearly singular: a part of the model held by slack segments alone).
-A step that raises the largest residual more than ``RESIDUAL_JUMP`` times is taken back whatever the step at its
-end: a step along a nearly free mode (a stretch of line between slack segments) can stretch segments so far that
-K at its end is stiffer and its step short, which the step test alone would keep, and the solve then spends
-hundreds of iterations undoing it (on a coarse equilibrium mapped onto finer lines: a residual of 95 node weights
-raised to 8e6). Why 1e4: the first guess's steps raise the residual a thousandfold where a swing closes in one
-stiff segment, harmlessly, and on the statics benchmark's slowest scenes a bound of 3e3 left a solve unconverged;
-a bound of 1e5 let the slowest solves wander (the residual swinging between 1e-2 and 1e5 node weights over
-hundreds of iterations, a third of the steps taken back) and left one unconverged.
-Converged when the residual is within tolerance and the step at the state is below the step tolerance.
+0.3 N/m on the anchor, a hundredth or less of the least stiffness K keeps on a slack segment
+(``statics_assembly.SLACK_STIFFNESS`` EA / l0: 20-75 N/m on the polyester), so that the step hardly changes with
+tau. A step longer than ``OVERSIZE`` step limits cuts tau at once (K nearly singular: a part of the model held by
+slack segments alone). A step that raises the largest residual more than ``RESIDUAL_JUMP`` times is taken back
+whatever the step at its end: a step along a nearly free mode (a stretch of line between slack segments) can stretch
+segments so far that K at its end is stiffer and its step short, which the step test alone would keep, and the solve
+then spends hundreds of iterations undoing it (on a coarse equilibrium mapped onto finer lines: a residual of 95
+node weights raised to 8e6). Why 1e4: the first guess's steps raise the residual a thousandfold where a swing closes
+in one stiff segment, harmlessly, and on the statics benchmark's slowest scenes a bound of 3e3 left a solve
+unconverged; a bound of 1e5 let the slowest solves wander (the residual swinging between 1e-2 and 1e5 node weights
+over hundreds of iterations, a third of the steps taken back) and left one unconverged. Converged when the residual
+is within tolerance and the step at the state is below the step tolerance.
 
 The step's seabed set (``statics_system.solve_step``): a node on the seabed (at the state, or put there by one of
 the step's solves) leaves the set where a later solve lifts it (once per step), unless ``C_SEABED_RELEASE`` is 0,

@@ -25,8 +25,9 @@ leaving once per step (one that comes back stays, so that the solves cannot cycl
 
 A segment carries tension only when taut. A segment that has been slack for ``SLACK_PATIENCE`` iterations (and
 one slack in the first guess: excess line laid on the seabed) keeps only a small floor stiffness
-(``SLACK_STIFFNESS`` EA / l0, along and across it), so that folds and grounded slack move freely; one slack for a
-step or two, as a large step leaves many, keeps its EA in K, so that K stays far from singular.
+(``statics_assembly.SLACK_STIFFNESS`` EA / l0, along and across it), so that folds and grounded slack move freely;
+one slack for a step or two, as a large step leaves many, keeps its EA in K, so that K stays far from singular.
+K's part from the lines is assembled in ``physics/statics_assembly.py``, once per state.
 """
 
 from __future__ import annotations
