@@ -61,7 +61,7 @@ from moor_env.physics.anchor import tilt_deg  # noqa: E402
 
 try:  # the breakdown needs the record kernels; a baseline tree from before them is timed on whole runs only
     from moor_env.physics import implicit as imp  # noqa: E402
-    from moor_env.physics.implicit_active_set import predict_turns, update_active_set  # noqa: E402
+    from moor_env.physics.implicit_active_set import update_active_set  # noqa: E402
     from moor_env.physics.implicit_assembly import assemble  # noqa: E402
     from moor_env.physics.integrate import compute_loads, speed_step_factor  # noqa: E402
 except ImportError:
@@ -265,7 +265,6 @@ def solves_per_step(case: Case) -> dict:
         tree = w.pos0.view(np.int64)
         orow = w.vel0.view(np.int64)
         nq = imp.prepare(False, body_node, state, tree, orow)
-        predict_turns(h, state, orow)
         n = 0
         for it in range(imp.MAX_ACTIVE_SET_SOLVES):
             n += 1

@@ -30,7 +30,7 @@ from moor_env.physics import implicit as imp  # noqa: E402
 from moor_env.physics import implicit_contact as ic  # noqa: E402
 from moor_env.physics import implicit_contact_set as ics  # noqa: E402
 from moor_env.physics import layout as L  # noqa: E402
-from moor_env.physics.implicit_active_set import predict_turns, update_active_set  # noqa: E402
+from moor_env.physics.implicit_active_set import update_active_set  # noqa: E402
 from moor_env.physics.implicit_assembly import assemble  # noqa: E402
 from moor_env.simulation import run_drop  # noqa: E402
 
@@ -78,7 +78,6 @@ def solves_per_step(sim, saved) -> dict:
         body_node = int(np.flatnonzero(state.node_i[:, L.NI_KIND] == L.NODE_BODY)[0])
         tree, orow = state.pos0.view(np.int64), state.vel0.view(np.int64)
         nq = imp.prepare(False, body_node, state, tree, orow)
-        predict_turns(sim.dt, state, orow)
         contact = model.contact_f[L.CF_ON] != 0.0
         if contact:
             ics.init_contact_set(sim.dt, model, state)

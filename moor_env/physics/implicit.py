@@ -24,11 +24,12 @@ segment snapping taut within a step is an inelastic event. Linearised (implicit)
   solve turns so far that its end chord |d0 + h (v1_b - v1_a)| passes the linear prediction by
   ``TURN_TOLERANCE`` (strain) is linearised again at that chord and the step solved again, one more Newton
   iteration on its spring: the turn would otherwise stretch it by about (h v_perp)^2 / (2 l0), which the next
-  load evaluation reads as tension (24 MN on a 1 m chain segment turning at 15 m/s over 11.25 ms). Where that turn
-  can be foreseen the solve it costs is saved: a taut segment whose start velocities turn it so far is linearised
-  along its predicted end chord d0 + h (v_b - v_a) from the first solve on (``implicit_active_set.predict_turns``),
-  and a segment entering the set along the direction the solve gave its end chord
-  (``implicit_active_set._enter_along_end_chord``). Without the
+  load evaluation reads as tension (24 MN on a 1 m chain segment turning at 15 m/s over 11.25 ms). A segment
+  entering the set is linearised along the direction the solve gave its end chord
+  (``implicit_active_set._enter_along_end_chord``), which saves the turn check's solve. A taut segment is not
+  linearised along a chord predicted from its start velocities: where a chain piles up on the falling anchor, the
+  step reverses those velocities, and such a prediction left fall steps ending at three times the chain's MBL in
+  most crew episodes (``benchmarks/mbl_exceedance.py``). Without the
   end-of-step set, a segment going taut inside a step would be stretched explicitly and spring back elastically in
   the next one, and on a slack chain these snaps would run along it one segment per step and grow until the strain
   limit;
@@ -79,7 +80,7 @@ import numpy as np
 from moor_env.physics._jit import jit_no_refcount, jit_step
 from moor_env.physics.anchor import body_acceleration, rotate_axis
 from moor_env.physics.contact import record_contact_force
-from moor_env.physics.implicit_active_set import init_active_set, predict_turns, update_active_set
+from moor_env.physics.implicit_active_set import init_active_set, update_active_set
 from moor_env.physics.implicit_assembly import assemble
 from moor_env.physics.implicit_contact import any_law, assemble_contact, contact_reaction
 from moor_env.physics.implicit_contact_set import init_contact_set, update_contact_set
@@ -282,7 +283,6 @@ def implicit_euler_update(model, state, h, reuse_order):
                 body_node = n
                 break
     nq = prepare(reuse_order, body_node, state, tree, orow)
-    predict_turns(h, state, orow)
     contact = body_active and model.contact_f[CF_ON] != 0.0
     if contact:
         init_contact_set(h, model, state)

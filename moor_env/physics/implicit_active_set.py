@@ -55,8 +55,8 @@ def _flip(orow, s):
 @jit_step
 def chord_point(s, seg_chord, kq, l0):
     """Length [m], unit tangent and transverse stiffness kt [N/m] of segment s at its re-linearisation point
-    (``seg_chord[s, :3]``: the end chord a solve predicted, or a predicted direction at a chosen length,
-    :func:`predict_turns`, :func:`_enter_along_end_chord`): kt = T_e / length, T_e = kq (length - l0) its
+    (``seg_chord[s, :3]``: the end chord a solve predicted, or a direction at a chosen length,
+    :func:`_enter_along_end_chord`): kt = T_e / length, T_e = kq (length - l0) its
     elastic tension there (>= 0, so that the block stays positive semi-definite)."""
     dx = seg_chord[s, 0]
     dy = seg_chord[s, 1]
@@ -192,44 +192,6 @@ def _pass_active_set(h, model, state, orow, flip_exits):
             _flip(orow, s)
             _enter_along_end_chord(s, h, l0, strain1, node_pos, node_vel, a, b, ddx, ddy, ddz, seg_chord)
     return entries, exits, turns
-
-
-@jit_no_refcount
-def predict_turns(h, state, orow):
-    """Linearise each taut segment that its start velocities turn within the step along its predicted end chord
-    p = d0 + h (v_b - v_a), at its present length |d0| (its present tension), instead of along its start chord,
-    where p is longer than the linear prediction by ``TURN_TOLERANCE`` (strain): the first solve then holds it
-    about where a turn check after that solve would have put it (:func:`_pass_active_set`), and the checks after
-    every solve still correct a prediction that misses. The segment may still leave the set. Not at p itself: a
-    turn's stretch there gives the spring the geometric stiffness of its elastic tension at |p| across the chain,
-    which holds a kicked node back (a 15 m/s kick on the hanging 1 m chain: 1.98 MN after one step against
-    1.49 MN in sub-steps). With the entering segments' direction (:func:`_enter_along_end_chord`) gjoa-500's fine
-    fall takes 2.32 solves per step (2.69 without either) and its hanging in waves 1.02 (1.29)
-    (``benchmarks/bench_implicit_step.py``)."""
-    node_pos, node_vel, seg_i, seg_f, seg_chord = (state.node_pos, state.node_vel, state.seg_i, state.seg_f,
-                                                   state.seg_chord)
-    nn = orow.shape[0]
-    for s in range(seg_i.shape[0]):
-        if seg_i[s, SI_ACTIVE] == 0 or (s >> 5) >= nn or is_active(orow, s) == 0:
-            continue
-        a = seg_i[s, SI_A]
-        b = seg_i[s, SI_B]
-        l0 = seg_f[s, SF_L0]
-        length, qx, qy, qz = segment_axis(node_pos, a, b)
-        rx = node_vel[b, 0] - node_vel[a, 0]
-        ry = node_vel[b, 1] - node_vel[a, 1]
-        rz = node_vel[b, 2] - node_vel[a, 2]
-        strain1 = (length - l0 + h * (rx * qx + ry * qy + rz * qz)) / l0
-        px = node_pos[b, 0] - node_pos[a, 0] + h * rx
-        py = node_pos[b, 1] - node_pos[a, 1] + h * ry
-        pz = node_pos[b, 2] - node_pos[a, 2] + h * rz
-        strain_chord = math.sqrt(px * px + py * py + pz * pz) / l0 - 1.0
-        if strain_chord - strain1 > TURN_TOLERANCE and strain_chord > SET_TOLERANCE:
-            scale = length / (l0 * (1.0 + strain_chord))
-            seg_chord[s, 0] = px * scale
-            seg_chord[s, 1] = py * scale
-            seg_chord[s, 2] = pz * scale
-            seg_chord[s, 3] = 1.0
 
 
 @jit_step
