@@ -27,9 +27,9 @@ segment snapping taut within a step is an inelastic event. Linearised (implicit)
   load evaluation reads as tension (24 MN on a 1 m chain segment turning at 15 m/s over 11.25 ms). A segment
   entering the set is linearised along the direction the solve gave its end chord
   (``implicit_active_set._enter_along_end_chord``), which saves the turn check's solve. A taut segment is not
-  linearised along a chord predicted from its start velocities: where a chain piles up on the falling anchor, the
-  step reverses those velocities, and such a prediction left fall steps ending at three times the chain's MBL in
-  most crew episodes (``benchmarks/mbl_exceedance.py``). Without the
+  linearised along a chord predicted from its start velocities: where a chain piles up on the falling anchor the
+  step reverses those velocities, and fall steps linearised so end at about three times the chain's MBL in most
+  crew episodes (``benchmarks/mbl_exceedance.py``). Without the
   end-of-step set, a segment going taut inside a step would be stretched explicitly and spring back elastically in
   the next one, and on a slack chain these snaps would run along it one segment per step and grow until the strain
   limit;

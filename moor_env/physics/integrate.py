@@ -234,8 +234,9 @@ def end_state_status(model, state, max_strain, worst_seg, max_tension_before):
     step coarser than the scene's (the env's pre-release phase), where such a peak comes from a segment turned
     through several lengths in one step (a swinging chain loop) rather than from a load, and the advance is
     repeated at the scene's step. A line already above its breaking load (taken there at the scene's step) is
-    checked too, at every raise: a coarse step's spike on top of such a peak is no load either (unchecked, one
-    raised a mooring line's maximum from 1.2 to 25 times its MBL before a release).
+    checked too, at every raise: a coarse step's spike on top of such a peak is no load either (unchecked, a coarse
+    step raised a mooring line's maximum from 1.2 to 25 times its MBL in a calm episode of
+    ``benchmarks/robustness.py``).
 
     Returns
     -------

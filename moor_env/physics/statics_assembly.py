@@ -6,7 +6,8 @@ cut pseudo time step (``physics/statics_newton.py``). Those solves differ only i
 seabed's terms and the line-anchor contact's, so the segments' stiffness and current-drag terms, the most costly
 part of the assembly, are computed once per state and set of taut segments (:func:`assemble_lines`) and each
 solve adds its own diagonal to them (:func:`assemble_diagonal`). The line-anchor contact adds its segment terms to
-the couplings themselves; a clean copy of those is kept and put back before the next solve's contact terms.
+the couplings themselves: the couplings of the segments it touches are copied before it and put back after the
+elimination (:func:`hold_contact_couplings`, :func:`release_contact_couplings`).
 """
 
 from __future__ import annotations
