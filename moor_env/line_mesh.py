@@ -89,8 +89,8 @@ def hanging_curve(start, end, length: float, seabed_z: float, n: int = 400) -> n
     sized so that its arc length is ``length`` (within ``SAG_TOLERANCE`` of it), clipped at the seabed.
 
     The sag is found by the Illinois variant of regula falsi on a bracket: the arc length grows monotonically with
-    the sag, and the search takes about nine evaluations (23 at most over 2000 random geometries of the statics
-    benchmark's ranges), a fraction of what bisection to the same tolerance takes.
+    the sag, and the search takes about nine evaluations (23 at most over 2000 random depths of 100-1500 m, spans
+    up to 600 m and lengths up to twice the chord), a fraction of what bisection to the same tolerance takes.
     """
     start = np.asarray(start, float)
     end = np.asarray(end, float)
